@@ -1,0 +1,464 @@
+/*
+ * femlod.h - the one public C header of femlod.
+ *
+ * femlod turns dense triangle meshes into finite-element surface meshes of
+ * chosen size and quality (Lee et al., "Mesh simplification and adaptive LOD
+ * for finite element mesh generation"; see docs/algorithms.md).
+ *
+ * Conventions (docs/design.md has the reasons):
+ *   - Objects with state are opaque handles (femlod_mesh); options and results
+ *     are plain structs that are valid when zero-initialised, with an _INIT
+ *     macro giving the documented defaults.
+ *   - Every function that can fail returns a femlod_status (FEMLOD_OK == 0,
+ *     negative on failure) and fills the optional caller-owned femlod_error
+ *     with a one-line message naming the culprit, e.g.
+ *     "part.obj:14: face index 9 out of range (8 vertices)".
+ *   - *out is written only on success; a failed call frees what it made;
+ *     every _free(NULL) is a no-op.
+ *   - Views returned by getters stay valid until the object is changed or freed.
+ *   - Programming errors (NULL handles) are asserts; bad data never is.
+ *   - Results never depend on pointer values, hash order or timing.
+ *
+ * Units: lengths are in the mesh's own units; angles in degrees.
+ */
+#ifndef FEMLOD_H
+#define FEMLOD_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define FEMLOD_VERSION_MAJOR 0
+#define FEMLOD_VERSION_MINOR 1
+#define FEMLOD_VERSION_PATCH 0
+#define FEMLOD_VERSION_STRING "0.1.0"
+
+/* {====================================================================
+ * Status and errors
+ * ===================================================================== */
+
+typedef enum femlod_status {
+    FEMLOD_OK = 0,
+    FEMLOD_ENOMEM = -1,     /* an allocation failed */
+    FEMLOD_EIO = -2,        /* a file could not be opened, read or written */
+    FEMLOD_EPARSE = -3,     /* a file is malformed */
+    FEMLOD_EINPUT = -4,     /* an argument or option is out of range */
+    FEMLOD_ETOPOLOGY = -5,  /* the mesh's connectivity does not allow the operation */
+    FEMLOD_ECANCELLED = -6, /* a progress callback asked to stop */
+    FEMLOD_EUNSUPPORTED = -7, /* a valid file uses a feature femlod does not read */
+    FEMLOD_ELIMIT = -8      /* a resource limit (memory, time) was exceeded */
+} femlod_status;
+
+#define FEMLOD_ERROR_MESSAGE_SIZE 256
+
+/* Caller-owned error record; pass NULL where the details are not wanted. */
+typedef struct femlod_error {
+    femlod_status status;
+    char message[FEMLOD_ERROR_MESSAGE_SIZE];
+} femlod_error;
+
+/* A short stable name for a status: "ok", "nomem", "io", "parse", "input",
+ * "topology", "cancelled", "unsupported", "limit" ("unknown" otherwise). */
+const char *femlod_status_name(femlod_status status);
+
+/* Progress callback: done is in [0, 1]; a nonzero return cancels the
+ * operation, which then fails with FEMLOD_ECANCELLED. */
+typedef int (*femlod_progress_fn)(void *payload, double done);
+
+/* }==================================================================== */
+
+/* {====================================================================
+ * Mesh
+ * ===================================================================== */
+
+/* An indexed triangle mesh: double-precision positions and 32-bit vertex
+ * indices, three per triangle. Triangles may be degenerate, duplicated or
+ * non-manifold: a mesh holds what its file held, and the quality report
+ * counts the defects. */
+typedef struct femlod_mesh femlod_mesh;
+
+/* Makes a mesh from arrays (copied). positions holds 3*vertex_count
+ * coordinates, triangles 3*triangle_count indices. Fails with FEMLOD_EINPUT
+ * on an index >= vertex_count or a non-finite coordinate, and with
+ * FEMLOD_ENOMEM when the counts exceed UINT32_MAX or memory. */
+femlod_status femlod_mesh_create(femlod_mesh **out, const double *positions, size_t vertex_count,
+                                 const uint32_t *triangles, size_t triangle_count,
+                                 femlod_error *err);
+
+/* Deep copy. */
+femlod_status femlod_mesh_copy(femlod_mesh **out, const femlod_mesh *mesh, femlod_error *err);
+
+void femlod_mesh_free(femlod_mesh *mesh);
+
+size_t femlod_mesh_vertex_count(const femlod_mesh *mesh);
+size_t femlod_mesh_triangle_count(const femlod_mesh *mesh);
+/* Views: 3*vertex_count doubles and 3*triangle_count indices. */
+const double *femlod_mesh_positions(const femlod_mesh *mesh);
+const uint32_t *femlod_mesh_triangles(const femlod_mesh *mesh);
+
+/* Axis-aligned bounding box of the vertices; all zero for an empty mesh. */
+void femlod_mesh_bbox(const femlod_mesh *mesh, double min[3], double max[3]);
+
+/* Total area of the triangles. */
+double femlod_mesh_area(const femlod_mesh *mesh);
+
+/* 1-to-4 subdivision, repeated levels times (paper section 3): each triangle
+ * is split at its edge midpoints; a midpoint is shared by every triangle on
+ * its edge (also on non-manifold edges). The triangle count grows by 4^levels:
+ * fails with FEMLOD_EINPUT when that would pass UINT32_MAX. levels == 0
+ * copies. Orientation and triangle order are kept (child k of triangle t is
+ * triangle 4t+k, the corner children first, the middle one last). */
+femlod_status femlod_mesh_subdivide(femlod_mesh **out, const femlod_mesh *mesh, unsigned levels,
+                                    femlod_error *err);
+
+/* Connectivity facts, computed in time linear in the mesh size. */
+typedef struct femlod_topology {
+    size_t edges;                 /* distinct undirected edges (degenerate triangles' a-a "edges" excluded) */
+    size_t boundary_edges;        /* edges with one triangle */
+    size_t nonmanifold_edges;     /* edges with three or more triangles */
+    size_t nonmanifold_vertices;  /* vertices whose triangles form more than one fan, or on a non-manifold edge */
+    size_t inconsistent_edges;    /* two-triangle edges traversed twice in the same direction */
+    size_t isolated_vertices;     /* vertices used by no triangle */
+    size_t components;            /* connected components of triangles (through shared vertices) */
+    int closed;                   /* every edge has exactly two triangles (and there is one) */
+    int manifold;                 /* no non-manifold edge or vertex */
+    int oriented;                 /* no inconsistent edge */
+} femlod_topology;
+
+femlod_status femlod_mesh_topology(const femlod_mesh *mesh, femlod_topology *out,
+                                   femlod_error *err);
+
+/* }==================================================================== */
+
+/* {====================================================================
+ * Quality (paper section 4.1, method-notes.md "Element measures")
+ * ===================================================================== */
+
+/* Stretch of triangle (a, b, c): sqrt(12) * inradius / longest edge; 1 for an
+ * equilateral triangle, 0 for a degenerate one. */
+double femlod_triangle_stretch(const double a[3], const double b[3], const double c[3]);
+
+/* Size of a triangle: its longest edge. */
+double femlod_triangle_size(const double a[3], const double b[3], const double c[3]);
+
+/* Per-triangle stretch and size, and per-vertex valence (distinct neighbours
+ * through edges), as pure array functions. out has triangle_count
+ * (vertex_count) entries. Indices must be < vertex_count. */
+void femlod_stretch_array(double *out, const double *positions, const uint32_t *triangles,
+                          size_t triangle_count);
+void femlod_size_array(double *out, const double *positions, const uint32_t *triangles,
+                       size_t triangle_count);
+femlod_status femlod_valence_array(uint32_t *out, size_t vertex_count, const uint32_t *triangles,
+                                   size_t triangle_count, femlod_error *err);
+
+#define FEMLOD_HISTOGRAM_BINS 10
+
+/* The quality report: the paper's Table 1 columns and the defects a FE user
+ * needs to know of. Stretch and angle statistics are over all triangles
+ * (degenerate ones included, with stretch 0; a triangle with a zero-length
+ * side counts as angles 0 and 180). Duplicates compare sorted index triples.
+ * A mesh without triangles gives zeros in every statistic, minima included.
+ * docs/quality.md has the formulas. */
+typedef struct femlod_quality {
+    size_t triangles;
+    size_t vertices;
+    double stretch_avg, stretch_min, stretch_max;
+    double size_max, size_min, size_avg; /* longest edge per triangle */
+    uint32_t valence_max;
+    double valence_avg;          /* over vertices used by at least one triangle */
+    double angle_min, angle_max; /* smallest and largest interior angle, degrees */
+    size_t degenerate;           /* repeated vertex index or stretch < 1e-6 */
+    size_t duplicate;            /* triangles with the same vertex set as an earlier one */
+    size_t histogram[FEMLOD_HISTOGRAM_BINS]; /* bin k: stretch in [k/10, (k+1)/10), last bin closed */
+    double area;
+    double bbox_min[3], bbox_max[3];
+    femlod_topology topology;
+} femlod_quality;
+
+femlod_status femlod_mesh_quality(const femlod_mesh *mesh, femlod_quality *out, femlod_error *err);
+
+/* Two-sided Hausdorff distance, sampled: every vertex, every edge midpoint
+ * and a regular barycentric grid on each triangle with spacing about
+ * `spacing` (0: the reference's bounding-box diagonal / 500) of both meshes
+ * is projected on the other mesh through an AABB tree. Deterministic.
+ * Vertices used by no triangle are not samples; docs/quality.md has the
+ * exact sampling rule. */
+typedef struct femlod_hausdorff_options {
+    double spacing;      /* sample spacing in mesh units; 0 for the default */
+    size_t max_samples;  /* cap per mesh side (0: 4 000 000); spacing grows to respect it,
+                            but vertices and edge midpoints are always taken */
+} femlod_hausdorff_options;
+#define FEMLOD_HAUSDORFF_OPTIONS_INIT {0.0, 0}
+
+typedef struct femlod_hausdorff_result {
+    double distance;      /* max of both one-sided distances */
+    double relative;      /* distance / reference bounding-box diagonal (0 when that is 0) */
+    double forward;       /* max over mesh samples of the distance to the reference */
+    double backward;      /* max over reference samples of the distance to the mesh */
+    double mean_forward;  /* mean over mesh samples */
+    double diagonal;      /* the reference's bounding-box diagonal */
+    size_t samples;       /* samples taken on both sides */
+} femlod_hausdorff_result;
+
+/* Fails with FEMLOD_EINPUT when either mesh has no triangle or the spacing
+ * is negative or not finite. */
+femlod_status femlod_mesh_hausdorff(const femlod_mesh *mesh, const femlod_mesh *reference,
+                                    const femlod_hausdorff_options *options,
+                                    femlod_hausdorff_result *out, femlod_error *err);
+
+/* }==================================================================== */
+
+/* {====================================================================
+ * Reading and writing
+ * ===================================================================== */
+
+typedef enum femlod_format {
+    FEMLOD_FORMAT_AUTO = 0,   /* from the file name's extension (reading STL: ASCII/binary by size) */
+    FEMLOD_FORMAT_OBJ,
+    FEMLOD_FORMAT_STL,        /* reading: detect; writing: binary */
+    FEMLOD_FORMAT_STL_ASCII,
+    FEMLOD_FORMAT_STL_BINARY,
+    FEMLOD_FORMAT_OFF,
+    FEMLOD_FORMAT_PLY,        /* reading: any supported encoding; writing: binary little-endian */
+    FEMLOD_FORMAT_PLY_ASCII,
+    FEMLOD_FORMAT_PLY_BINARY
+} femlod_format;
+
+/* Format names as the Lua `format` option spells them: "obj", "stl",
+ * "stl_ascii", "stl_binary", "off", "ply", "ply_ascii", "ply_binary". */
+const char *femlod_format_name(femlod_format format);
+/* Returns FEMLOD_FORMAT_AUTO when the name is unknown. */
+femlod_format femlod_format_from_name(const char *name);
+/* From a path's extension (case-insensitive); FEMLOD_FORMAT_AUTO when unknown. */
+femlod_format femlod_format_from_path(const char *path);
+
+typedef struct femlod_read_options {
+    femlod_format format; /* FEMLOD_FORMAT_AUTO: from the extension */
+} femlod_read_options;
+#define FEMLOD_READ_OPTIONS_INIT {FEMLOD_FORMAT_AUTO}
+
+/* Reads a mesh. OBJ, OFF and PLY keep the file's vertices and indices;
+ * STL (which has no shared vertices) is welded: positions that compare equal
+ * (-0.0 == 0.0) become one vertex, numbered in order of first appearance.
+ * Degenerate and duplicate triangles are kept. Errors name the place:
+ * "FILE:LINE: message" for text, "FILE: byte N: message" for binary data. */
+femlod_status femlod_mesh_read(femlod_mesh **out, const char *path,
+                               const femlod_read_options *options, femlod_error *err);
+
+/* The same from memory; name is used in messages only. format must not be
+ * FEMLOD_FORMAT_AUTO unless name has a known extension. */
+femlod_status femlod_mesh_read_memory(femlod_mesh **out, const void *data, size_t size,
+                                      const char *name, const femlod_read_options *options,
+                                      femlod_error *err);
+
+typedef struct femlod_write_options {
+    femlod_format format; /* FEMLOD_FORMAT_AUTO: from the extension */
+} femlod_write_options;
+#define FEMLOD_WRITE_OPTIONS_INIT {FEMLOD_FORMAT_AUTO}
+
+/* Writes a mesh. Output goes to a temporary file beside path that is renamed
+ * over path only once complete, so a failed write leaves path as it was.
+ * Text formats print each coordinate with the fewest digits that read back
+ * to the same double (locale-independent); binary STL stores float32, binary
+ * PLY stores float64, so PLY and text formats round-trip exactly. */
+femlod_status femlod_mesh_write(const femlod_mesh *mesh, const char *path,
+                                const femlod_write_options *options, femlod_error *err);
+
+/* }==================================================================== */
+
+/* {=== Simplification (paper section 4) */
+
+/*
+ * Quality-controlled edge collapse (paper 4.2 with method-notes.md's
+ * corrections; docs/simplify.md maps every step to the code). Every
+ * triangle a collapse creates meets the thresholds below, so the output
+ * meets them wherever the input did; the input's own violations are
+ * counted in femlod_simplify_result.violating_input.
+ *
+ * Thresholds, one convention for every numeric option (Lua: nil, false,
+ * number):
+ *   0 (zero-initialised, or nil in Lua)  the documented default;
+ *   < 0 (FEMLOD_SIMPLIFY_OFF, or false)  switched off;
+ *   > 0                                  the value itself.
+ * A value of exactly zero cannot be asked for: use a tiny positive number
+ * (e.g. tolerance = 1e-300 collapses only where the error is zero).
+ * ===================================================================== */
+
+#define FEMLOD_SIMPLIFY_OFF (-1.0)
+
+/* Lock callback: called once per input vertex, in index order, with its
+ * position; nonzero locks the vertex (it keeps its exact position). */
+typedef int (*femlod_lock_fn)(void *payload, double x, double y, double z);
+
+typedef struct femlod_simplify_options {
+    /* Stop when the mesh has at most this many triangles; 0: no target
+     * (simplify until no valid edge is left). */
+    size_t target;
+    /* Output triangles / input triangles in (0, 1], instead of target;
+     * 0: none. Setting both target and ratio fails with FEMLOD_EINPUT. */
+    double ratio;
+    /* tau_TL (C1): the largest quadric error d_ij(k) of a collapse, in the
+     * paper's units: a sum of squared distances to face planes and
+     * (weighted) feature lines, length^2. Default: 0.06 * (mean input edge
+     * length)^2 * (input triangles / 1000)^(1/2)... see docs/simplify.md. */
+    double tolerance;
+    /* Length: no removed input vertex may end farther than this from the
+     * output surface (tracked per triangle, as PMP's decimation does).
+     * Default: off. */
+    double max_deviation;
+    /* tau_ST (C2): least stretch (sqrt(12) * inradius / longest edge, in
+     * [0, 1]) of every created triangle. Default 0.2. */
+    double min_stretch;
+    /* tau_SZ (C3): longest edge of every created triangle, length.
+     * Default: 0.1 * bounding-box diagonal. */
+    double max_size;
+    /* tau_VL (C4): most neighbours of every created vertex. Default 12;
+     * < 0: off (vertices with more than 253 neighbours are never created). */
+    int max_valence;
+    /* Degrees: an edge whose two triangles' normals differ by more than this
+     * is a sharp feature edge. Boundary and non-manifold edges always are.
+     * Default 40; off: no sharp edges. */
+    double feature_angle;
+    /* Weight of the line quadric of a feature edge, relative to one face
+     * plane, scaled by sharpness (1 - cos dihedral) / 2, and full weight for
+     * boundary and non-manifold edges. Default 10; off: no line quadrics
+     * (features still never merge or leave their line). */
+    double feature_weight;
+    /* Degrees: no collapse may turn a triangle's normal by more than this,
+     * and no output triangle's normal may differ by more than this from the
+     * normals of the input triangles it replaces (normal cones). Default 60;
+     * off: only flipped triangles (turned past 90 degrees) are refused and
+     * no normal cones are kept. */
+    double max_normal_change;
+    /* Nonzero: boundary vertices never move and boundary edges never
+     * collapse. */
+    int keep_boundary;
+    /* Nonzero: face planes are weighted by area, normalised per vertex so
+     * that tolerance keeps its units (method-notes.md). Default 0 (the
+     * paper's uniform weights). */
+    int area_weighted;
+    /* Input vertex indices that must keep their exact position (loads,
+     * boundary conditions); out-of-range indices fail with FEMLOD_EINPUT.
+     * Collapses may merge a neighbour into a locked vertex, never move it. */
+    const uint32_t *lock;
+    size_t lock_count;
+    femlod_lock_fn lock_fn; /* NULL: none */
+    void *lock_payload;
+    /* Called about every 1% of the work with done in [0, 1]; a nonzero
+     * return stops the simplification, which then succeeds with the mesh as
+     * it stands and stop_reason FEMLOD_STOP_CANCELLED (stopping short is
+     * success: every intermediate mesh is valid). */
+    femlod_progress_fn progress;
+    void *progress_payload;
+} femlod_simplify_options;
+
+#define FEMLOD_SIMPLIFY_OPTIONS_INIT {0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, NULL, 0, NULL, NULL, NULL, NULL}
+
+typedef enum femlod_stop_reason {
+    FEMLOD_STOP_TARGET = 0,        /* the target count was reached */
+    FEMLOD_STOP_NO_VALID_EDGE = 1, /* every remaining collapse would break a threshold */
+    FEMLOD_STOP_CANCELLED = 2      /* the progress callback asked to stop */
+} femlod_stop_reason;
+
+/* "target", "no_valid_edge", "cancelled". */
+const char *femlod_stop_reason_name(femlod_stop_reason reason);
+
+/* Why a candidate collapse was refused (the first failing check). */
+typedef enum femlod_reject {
+    FEMLOD_REJECT_TOLERANCE = 0,  /* C1 quadric error */
+    FEMLOD_REJECT_DEVIATION,      /* max_deviation */
+    FEMLOD_REJECT_STRETCH,        /* C2 (pre-phase: no improvement) */
+    FEMLOD_REJECT_SIZE,           /* C3 */
+    FEMLOD_REJECT_VALENCE,        /* C4 */
+    FEMLOD_REJECT_FOLDOVER,       /* normal flip or turn, current mesh or normal cone */
+    FEMLOD_REJECT_TOPOLOGY,       /* link condition, non-manifold, features, locks */
+    FEMLOD_REJECT_INTERSECTION,   /* a new triangle would cross another */
+    FEMLOD_REJECT_COUNT
+} femlod_reject;
+
+/* "tolerance", "deviation", "stretch", "size", "valence", "foldover",
+ * "topology", "intersection". */
+const char *femlod_reject_name(femlod_reject reason);
+
+typedef struct femlod_simplify_result {
+    size_t triangles;              /* in the output */
+    size_t vertices;               /* in the output */
+    femlod_stop_reason stop_reason;
+    size_t collapses;              /* all, pre-phase included */
+    size_t prephase_collapses;     /* of which removed input triangles below min_stretch */
+    /* Refused edge evaluations by first failing check. An edge is evaluated
+     * each time its neighbourhood changes, so these count evaluations, not
+     * edges: they tell which threshold binds. */
+    size_t rejected[FEMLOD_REJECT_COUNT];
+    /* Output triangles that break min_stretch or max_size: input triangles no
+     * valid collapse could remove (created triangles never do). */
+    size_t violating_input;
+    size_t dropped_degenerate;     /* input triangles with a repeated vertex index, not kept */
+    double seconds;                /* wall time (never influences the result) */
+    /* The thresholds in force, defaults resolved; FEMLOD_SIMPLIFY_OFF when off. */
+    size_t target;
+    double tolerance, max_deviation, min_stretch, max_size, feature_angle, feature_weight,
+        max_normal_change;
+    int max_valence;
+} femlod_simplify_result;
+
+/* The collapse log: every collapse in order, in a vertex numbering made for
+ * a binary vertex hierarchy (paper 5.1): input vertices are nodes
+ * 0..V-1 (V = femlod_collapse_log_input_vertices), collapse c merges nodes i
+ * and j into the new node V + c. Owned by the caller; immutable. */
+typedef struct femlod_collapse_log femlod_collapse_log;
+
+typedef struct femlod_collapse {
+    uint32_t i, j;        /* the merged nodes, i < j not implied */
+    uint32_t k;           /* the new node: V + c */
+    double position[3];   /* of k */
+    double e_size;        /* mean distance from k to its vstars (paper 5.1), length */
+    /* vstars: the neighbours of i or j at collapse time other than i and j,
+     * increasing node ids; view into the log. */
+    const uint32_t *vstars;
+    size_t vstar_count;   /* at most 253 */
+    /* The triangles the collapse removed: every triangle that had i or j as
+     * a corner, each as 3 local refs in the mesh's orientation, the ones
+     * with both i and j first; ref 0 is i, 1 is j, r >= 2 is vstars[r-2]
+     * (femlod_collapse_node). The created triangles are the others with i
+     * and j replaced by k; a vertex split restores the removed ones. */
+    const uint8_t *faces;
+    size_t face_count;
+} femlod_collapse;
+
+size_t femlod_collapse_log_count(const femlod_collapse_log *log);
+size_t femlod_collapse_log_input_vertices(const femlod_collapse_log *log);
+/* Collapses 0..n-1 were the stretch pre-phase. */
+size_t femlod_collapse_log_prephase(const femlod_collapse_log *log);
+/* Collapse c < count; the views stay valid until the log is freed. */
+void femlod_collapse_log_get(const femlod_collapse_log *log, size_t c, femlod_collapse *out);
+/* Node id of a local ref of c->faces. */
+uint32_t femlod_collapse_node(const femlod_collapse *c, uint8_t ref);
+/* Node id of each vertex of the output mesh (count = its vertex count). */
+const uint32_t *femlod_collapse_log_output_nodes(const femlod_collapse_log *log, size_t *count);
+/* Bytes held. */
+size_t femlod_collapse_log_bytes(const femlod_collapse_log *log);
+void femlod_collapse_log_free(femlod_collapse_log *log);
+
+/* Simplifies mesh into *out (a new mesh; mesh is not changed) and, when
+ * log is not NULL, records every collapse into *log. options NULL: all
+ * defaults. result (may be NULL) is filled on success. Vertices of the
+ * output are the surviving vertices in increasing order of their slot,
+ * triangles in increasing order of their slot; unused input vertices and
+ * triangles with a repeated index are not carried over.
+ * Fails with FEMLOD_EINPUT for inconsistent options, FEMLOD_ENOMEM.
+ * Deterministic: the same input and options give identical arrays. */
+femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **log, const femlod_mesh *mesh,
+                              const femlod_simplify_options *options, femlod_simplify_result *result,
+                              femlod_error *err);
+
+/* }==================================================================== */
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* FEMLOD_H */

@@ -1,0 +1,484 @@
+/*
+ * main.c - the femlod program: runs Lua recipes and the info and convert
+ * commands (shaped like Lua's own lua.c: all work happens in pmain, under
+ * lua_pcall, and errors are reported once, in main).
+ *
+ * Grammar: femlod [options] COMMAND [ARGS] [name=value ...]; see usage().
+ * Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded.
+ *
+ * The program never calls setlocale, so the C library stays in the "C"
+ * locale: number conversion of name=value pairs (lua_stringtonumber) and all
+ * number printing are locale independent.
+ */
+#include "lua/lfemlod.h"
+
+#include <lualib.h>
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PROGNAME "femlod"
+
+enum { EXIT_OK = 0, EXIT_ERROR = 1, EXIT_USAGE = 2, EXIT_LIMIT = 3 };
+
+typedef enum command { CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT } command;
+
+/* What the command line asked for. Indices point into argv. */
+typedef struct cli {
+    int argc;
+    char **argv;
+    lua_Integer seed;
+    int quiet, traceback;
+    command cmd;
+    int script;     /* argv index that becomes arg[0] (lua.c's convention); 0 for -e */
+    int operand;    /* first operand: recipe, code, mesh or input */
+    int pairs;      /* first name=value pair */
+} cli;
+
+static void usage_text(FILE *f) {
+    fputs("usage: " PROGNAME " [options] COMMAND [ARGS] [name=value ...]\n"
+          "       " PROGNAME " [options] RECIPE.lua [name=value ...]\n"
+          "\n"
+          "Commands:\n"
+          "  run RECIPE.lua   run a Lua recipe ('-' reads it from standard input);\n"
+          "                   the name=value pairs are in the global table `params`\n"
+          "  -e CODE          run a line of Lua, with params as for run\n"
+          "  info MESH        print the mesh's quality report\n"
+          "                   report=text|row|fields  format=FMT  reference=MESH\n"
+          "  convert IN OUT   read IN and write OUT (format from the extension)\n"
+          "                   format=FMT (of OUT)  input_format=FMT (of IN)\n"
+          "  help             print this help\n"
+          "\n"
+          "Options:\n"
+          "  --seed N         seed math.random with the integer N (default 0: runs repeat)\n"
+          "  --quiet          print nothing but what the command is for\n"
+          "  --traceback      add a Lua stack traceback to error messages\n"
+          "  -h, --help       print this help and exit\n"
+          "  -v, --version    print the version and exit\n"
+          "\n"
+          "A value is a number when Lua reads it as one (3, -2.5, 1e3, 0x10), true and\n"
+          "false are booleans, anything else is a string. In run and -e the module is\n"
+          "also the global `femlod`.\n"
+          "FMT: obj stl stl_ascii stl_binary off ply ply_ascii ply_binary\n"
+          "Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded.\n",
+          f);
+}
+
+/* A usage error: one line naming the problem, one pointing at the help. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 1, 2)))
+#endif
+static int usage_error(const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    fputs(PROGNAME ": ", stderr);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputs("\nusage: " PROGNAME " [options] COMMAND [ARGS] [name=value ...]"
+          " (try '" PROGNAME " --help')\n",
+          stderr);
+    fflush(stderr);
+    return EXIT_USAGE;
+}
+
+static void print_version(void) {
+    printf(PROGNAME " " FEMLOD_VERSION_STRING " (" LUA_RELEASE ")\n");
+}
+
+/* {====================================================================
+ * Command line
+ * ===================================================================== */
+
+/* Lua's own conversion (lua_stringtonumber) decides what is a number. */
+static int parse_seed(lua_State *L, cli *c, const char *s) {
+    int isint = 0;
+    if (lua_stringtonumber(L, s)) {
+        c->seed = lua_tointegerx(L, -1, &isint);
+        lua_pop(L, 1);
+    }
+    if (!isint) return usage_error("--seed: integer expected, got '%s'", s);
+    return EXIT_OK;
+}
+
+/* Not a command word: a recipe when it looks like a file name. */
+static int looks_like_recipe(const char *s) {
+    size_t n = strlen(s);
+    return strchr(s, '/') != NULL || (n > 4 && strcmp(s + n - 4, ".lua") == 0);
+}
+
+/* Fills c from argv; returns -1 to go on, or an exit status (help, version,
+ * usage error). */
+static int parse_args(lua_State *L, cli *c) {
+    int i = 1;
+    for (; i < c->argc; i++) {
+        const char *a = c->argv[i];
+        if (a[0] != '-' || strcmp(a, "-") == 0 || strcmp(a, "-e") == 0) break;
+        if (strcmp(a, "--") == 0) {
+            i++;
+            break;
+        }
+        if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
+            usage_text(stdout);
+            return EXIT_OK;
+        }
+        if (strcmp(a, "-v") == 0 || strcmp(a, "--version") == 0) {
+            print_version();
+            return EXIT_OK;
+        }
+        if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
+            c->quiet = 1;
+        } else if (strcmp(a, "--traceback") == 0) {
+            c->traceback = 1;
+        } else if (strcmp(a, "--seed") == 0) {
+            if (i + 1 >= c->argc) return usage_error("%s needs a value", a);
+            int st = parse_seed(L, c, c->argv[++i]);
+            if (st != EXIT_OK) return st;
+        } else if (strncmp(a, "--seed=", 7) == 0) {
+            int st = parse_seed(L, c, a + 7);
+            if (st != EXIT_OK) return st;
+        } else {
+            return usage_error("unknown option '%s'", a);
+        }
+    }
+    if (i >= c->argc) return usage_error("no command given");
+
+    const char *w = c->argv[i];
+    int need = 1; /* operands after the command word */
+    if (strcmp(w, "-e") == 0) {
+        c->cmd = CMD_EVAL;
+    } else if (strcmp(w, "run") == 0) {
+        c->cmd = CMD_RUN;
+    } else if (strcmp(w, "info") == 0) {
+        c->cmd = CMD_INFO;
+    } else if (strcmp(w, "convert") == 0) {
+        c->cmd = CMD_CONVERT;
+        need = 2;
+    } else if (strcmp(w, "help") == 0) {
+        usage_text(stdout);
+        return EXIT_OK;
+    } else if (looks_like_recipe(w) || strcmp(w, "-") == 0) {
+        c->cmd = CMD_RUN; /* femlod RECIPE.lua, as lua RECIPE.lua */
+        need = 0;
+        i--;              /* the word itself is the operand */
+    } else {
+        return usage_error("unknown command '%s'", w);
+    }
+    c->operand = i + 1;
+    if (c->operand + need > c->argc) {
+        static const char *const what[] = {"", "a recipe", "a line of Lua", "a mesh file",
+                                           "an input and an output file"};
+        return usage_error("missing %s", what[c->cmd]);
+    }
+    c->pairs = c->operand + (need ? need : 1);
+    c->script = c->cmd == CMD_RUN ? c->operand : 0;
+    return -1;
+}
+
+/* Pushes a name=value pair's value: Lua's number syntax, then booleans. */
+static void push_value(lua_State *L, const char *s) {
+    if (strcmp(s, "true") == 0)
+        lua_pushboolean(L, 1);
+    else if (strcmp(s, "false") == 0)
+        lua_pushboolean(L, 0);
+    else if (lua_stringtonumber(L, s) == 0)
+        lua_pushstring(L, s);
+}
+
+/* Builds the table of the name=value pairs. A pair given twice is an error:
+ * in a sweep it is far more often a mistake than an override. */
+static int push_pairs(lua_State *L, const cli *c) {
+    lua_newtable(L);
+    for (int i = c->pairs; i < c->argc; i++) {
+        const char *a = c->argv[i];
+        const char *eq = strchr(a, '=');
+        if (!eq || eq == a) return usage_error("expected name=value, got '%s'", a);
+        lua_pushlstring(L, a, (size_t)(eq - a));
+        if (lua_rawget(L, -2) != LUA_TNIL) {
+            lua_pop(L, 1);
+            return usage_error("parameter given twice: '%s'", a);
+        }
+        lua_pop(L, 1);
+        lua_pushlstring(L, a, (size_t)(eq - a));
+        push_value(L, eq + 1);
+        lua_rawset(L, -3);
+    }
+    return -1;
+}
+
+/* }==================================================================== */
+
+/* {====================================================================
+ * Running Lua (lua.c's msghandler and docall)
+ * ===================================================================== */
+
+/* Turns any error value into a message; adds the traceback when asked
+ * (upvalue 1), since most recipe errors are clear from their first line. */
+static int msghandler(lua_State *L) {
+    const char *msg = lua_tostring(L, 1);
+    if (msg == NULL) {
+        if (luaL_callmeta(L, 1, "__tostring") && lua_type(L, -1) == LUA_TSTRING) return 1;
+        msg = lua_pushfstring(L, "(error object is a %s value)", luaL_typename(L, 1));
+    }
+    if (lua_toboolean(L, lua_upvalueindex(1))) luaL_traceback(L, L, msg, 1);
+    return 1;
+}
+
+/* Calls the function below narg arguments; on error leaves the message. */
+static int docall(lua_State *L, int narg, int traceback) {
+    int base = lua_gettop(L) - narg;
+    lua_pushboolean(L, traceback);
+    lua_pushcclosure(L, msghandler, 1);
+    lua_insert(L, base);
+    int status = lua_pcall(L, narg, 0, base);
+    lua_remove(L, base);
+    return status;
+}
+
+/* Prints the error on the top of the stack and gives the exit status. */
+static int report(lua_State *L) {
+    const char *msg = lua_tostring(L, -1);
+    fflush(stdout);
+    fprintf(stderr, PROGNAME ": %s\n", msg ? msg : "(error object is not a string)");
+    fflush(stderr);
+    int status = fl_lua_is_limit_error(L, msg) ? EXIT_LIMIT : EXIT_ERROR;
+    lua_pop(L, 1);
+    return status;
+}
+
+/* The global `arg`, as lua.c makes it: arg[0] is the script, the program and
+ * the options have negative indices, the pairs positive ones. */
+static void set_arg_table(lua_State *L, const cli *c) {
+    lua_createtable(L, c->argc - c->script, c->script + 1);
+    for (int i = 0; i < c->argc; i++) {
+        lua_pushstring(L, c->argv[i]);
+        lua_rawseti(L, -2, i - c->script);
+    }
+    lua_setglobal(L, "arg");
+}
+
+/* Runs a recipe or a line of code with params and arg set, the module in
+ * the global `femlod`, and math.random seeded. */
+static int cmd_lua(lua_State *L, const cli *c) {
+    int st = push_pairs(L, c);
+    if (st >= 0) return st;
+    lua_setglobal(L, "params");
+    set_arg_table(L, c);
+    luaL_requiref(L, "femlod", luaopen_femlod, 1);
+    lua_pop(L, 1);
+
+    lua_getglobal(L, "math");
+    lua_getfield(L, -1, "randomseed");
+    lua_pushinteger(L, c->seed);
+    lua_call(L, 1, 0);
+    lua_pop(L, 1);
+
+    int status;
+    const char *src = c->argv[c->operand];
+    if (c->cmd == CMD_EVAL) {
+        status = luaL_loadbufferx(L, src, strlen(src), "=(command line)", "t");
+    } else {
+        /* Text only: bytecode can crash the interpreter (manual, load). */
+        status = luaL_loadfilex(L, strcmp(src, "-") == 0 ? NULL : src, "t");
+    }
+    if (status != LUA_OK) return report(L);
+    /* The pairs are also the chunk's varargs, as script arguments are in lua.c. */
+    int n = c->argc - c->pairs;
+    luaL_checkstack(L, n + 3, "too many parameters"); /* a C function gets only LUA_MINSTACK */
+    for (int i = c->pairs; i < c->argc; i++) lua_pushstring(L, c->argv[i]);
+    if (docall(L, n, c->traceback) != LUA_OK) return report(L);
+    return EXIT_OK;
+}
+
+/* }==================================================================== */
+
+/* {====================================================================
+ * info and convert: C calls into the module, so that errors carry no
+ * recipe position (there is no Lua caller for luaL_error to name).
+ * ===================================================================== */
+
+/* Checks that every pair's name is in keys and its value a string; leaves
+ * the pairs table on the stack. */
+static int check_pairs(lua_State *L, const cli *c, const char *const keys[], const char *list) {
+    int st = push_pairs(L, c);
+    if (st >= 0) return st;
+    lua_pushnil(L);
+    while (lua_next(L, -2)) {
+        const char *k = lua_tostring(L, -2);
+        int known = 0;
+        for (int i = 0; keys[i]; i++) known |= strcmp(keys[i], k) == 0;
+        lua_pop(L, 1);
+        if (!known) return usage_error("unknown parameter '%s' (valid: %s)", k, list);
+    }
+    return -1;
+}
+
+/* The string value of a pair (converted back from a number if need be:
+ * "reference=1" names a file called 1), or NULL. */
+static const char *pair_string(lua_State *L, int pairs, const char *key) {
+    lua_getfield(L, pairs, key);
+    const char *s = lua_isnil(L, -1) ? NULL : luaL_tolstring(L, -1, NULL);
+    /* The pairs table keeps no converted string alive: park it in the table. */
+    if (s) {
+        lua_setfield(L, pairs, key);
+        lua_getfield(L, pairs, key);
+        s = lua_tostring(L, -1);
+    }
+    lua_pop(L, s ? 2 : 1);
+    return s;
+}
+
+static int check_format(const char *key, const char *name) {
+    if (name && femlod_format_from_name(name) == FEMLOD_FORMAT_AUTO)
+        return usage_error("%s: unknown format '%s' (valid: obj, stl, stl_ascii, stl_binary, "
+                           "off, ply, ply_ascii, ply_binary)",
+                           key, name);
+    return -1;
+}
+
+/* femlod.load(path, {format = format}); leaves the mesh on the stack. */
+static void load_mesh(lua_State *L, int module, const char *path, const char *format) {
+    lua_getfield(L, module, "load");
+    lua_pushstring(L, path);
+    lua_createtable(L, 0, 1);
+    if (format) {
+        lua_pushstring(L, format);
+        lua_setfield(L, -2, "format");
+    }
+    lua_call(L, 2, 1);
+}
+
+/* Calls method name on the object at obj with nargs arguments already pushed. */
+static void call_method(lua_State *L, int obj, const char *name, int nargs, int nres) {
+    lua_getfield(L, obj, name);
+    lua_pushvalue(L, obj);
+    lua_rotate(L, -2 - nargs, 2);
+    lua_call(L, nargs + 1, nres);
+}
+
+static const char *base_name(const char *path) {
+    const char *slash = strrchr(path, '/');
+    return slash ? slash + 1 : path;
+}
+
+static int cmd_info(lua_State *L, const cli *c) {
+    static const char *const keys[] = {"format", "reference", "report", NULL};
+    int st = check_pairs(L, c, keys, "format, reference, report");
+    if (st >= 0) return st;
+    int pairs = lua_gettop(L);
+    const char *format = pair_string(L, pairs, "format");
+    const char *reference = pair_string(L, pairs, "reference");
+    const char *mode = pair_string(L, pairs, "report");
+    if (!mode) mode = "text";
+    if (strcmp(mode, "text") != 0 && strcmp(mode, "row") != 0 && strcmp(mode, "fields") != 0)
+        return usage_error("report: unknown report '%s' (valid: text, row, fields)", mode);
+    if ((st = check_format("format", format)) >= 0) return st;
+
+    const char *path = c->argv[c->operand];
+    luaL_requiref(L, "femlod", luaopen_femlod, 0);
+    int module = lua_gettop(L);
+    load_mesh(L, module, path, format);
+    int mesh = lua_gettop(L);
+    if (reference)
+        load_mesh(L, module, reference, NULL);
+    else
+        lua_pushnil(L);
+    call_method(L, mesh, "quality", 1, 1);
+    int q = lua_gettop(L);
+
+    lua_getglobal(L, "require");
+    lua_pushliteral(L, "femlod.report");
+    lua_call(L, 1, 1);
+    lua_getfield(L, -1, mode);
+    lua_pushvalue(L, q);
+    lua_pushstring(L, base_name(path));
+    lua_call(L, 2, 1);
+    size_t len;
+    const char *text = lua_tolstring(L, -1, &len);
+    fwrite(text, 1, len, stdout);
+    putchar('\n');
+    return EXIT_OK;
+}
+
+static int cmd_convert(lua_State *L, const cli *c) {
+    static const char *const keys[] = {"format", "input_format", NULL};
+    int st = check_pairs(L, c, keys, "format, input_format");
+    if (st >= 0) return st;
+    int pairs = lua_gettop(L);
+    const char *format = pair_string(L, pairs, "format");
+    const char *input_format = pair_string(L, pairs, "input_format");
+    if ((st = check_format("format", format)) >= 0) return st;
+    if ((st = check_format("input_format", input_format)) >= 0) return st;
+
+    const char *in = c->argv[c->operand], *out = c->argv[c->operand + 1];
+    luaL_requiref(L, "femlod", luaopen_femlod, 0);
+    int module = lua_gettop(L);
+    load_mesh(L, module, in, input_format);
+    int mesh = lua_gettop(L);
+    lua_pushstring(L, out);
+    lua_createtable(L, 0, 1);
+    if (format) {
+        lua_pushstring(L, format);
+        lua_setfield(L, -2, "format");
+    }
+    call_method(L, mesh, "save", 2, 0);
+    if (!c->quiet) {
+        call_method(L, mesh, "counts", 0, 1);
+        lua_getfield(L, -1, "triangles");
+        lua_getfield(L, -2, "vertices");
+        femlod_format f = format ? femlod_format_from_name(format) : femlod_format_from_path(out);
+        printf("%s: %lld triangles, %lld vertices (%s)\n", out,
+               (long long)lua_tointeger(L, -2), (long long)lua_tointeger(L, -1),
+               f == FEMLOD_FORMAT_AUTO ? "?" : femlod_format_name(f));
+    }
+    return EXIT_OK;
+}
+
+/* }==================================================================== */
+
+static int pmain(lua_State *L) {
+    cli c = {0};
+    c.argc = (int)lua_tointeger(L, 1);
+    c.argv = (char **)lua_touserdata(L, 2);
+    luaL_checkversion(L);
+    int st = parse_args(L, &c);
+    if (st < 0) {
+        luaL_openlibs(L);
+        /* require "femlod" and its helpers work in every command. */
+        luaL_getsubtable(L, LUA_REGISTRYINDEX, LUA_PRELOAD_TABLE);
+        lua_pushcfunction(L, luaopen_femlod);
+        lua_setfield(L, -2, "femlod");
+        lua_pop(L, 1);
+        fl_lua_preload_helpers(L);
+        switch (c.cmd) {
+        case CMD_RUN:
+        case CMD_EVAL: st = cmd_lua(L, &c); break;
+        case CMD_INFO: st = cmd_info(L, &c); break;
+        case CMD_CONVERT: st = cmd_convert(L, &c); break;
+        case CMD_NONE: st = EXIT_USAGE; break;
+        }
+    }
+    lua_pushinteger(L, st);
+    return 1;
+}
+
+int main(int argc, char **argv) {
+    lua_State *L = luaL_newstate();
+    if (L == NULL) {
+        fputs(PROGNAME ": cannot create the Lua state: not enough memory\n", stderr);
+        return EXIT_ERROR;
+    }
+    lua_pushcfunction(L, pmain);
+    lua_pushinteger(L, argc);
+    lua_pushlightuserdata(L, argv);
+    int status = lua_pcall(L, 2, 1, 0);
+    int result = status == LUA_OK ? (int)lua_tointeger(L, -1) : report(L);
+    lua_close(L);
+    /* A full disk or closed pipe on stdout is a failure too. */
+    if (fflush(stdout) != 0 || ferror(stdout)) {
+        fputs(PROGNAME ": error writing to standard output\n", stderr);
+        if (result == EXIT_OK) result = EXIT_ERROR;
+    }
+    return result;
+}

@@ -1,0 +1,113 @@
+/*
+ * lfemlod.c - luaopen_femlod: the module table, its types, and the embedded
+ * pure-Lua helpers (lua/femlod/NAME.lua).
+ *
+ * `require "femlod"` returns one table and sets no global (unlike lfs.c's
+ * luaopen_lfs). The helpers are compiled in (cmake/embed_lua.cmake), so that
+ * neither the installed program nor the module needs a search path to find
+ * them: luaopen_femlod registers them in package.preload, and each also has
+ * its own luaopen_femlod_NAME so that the stock interpreter's all-in-one
+ * loader finds `require "femlod.report"` in femlod.so even before
+ * `require "femlod"` ran.
+ */
+#include "lfemlod.h"
+
+#include <string.h>
+
+/* Registry key of the message of the last FEMLOD_ELIMIT failure raised. */
+#define LIMIT_KEY "femlod.limit"
+
+int fl_lua_raise(lua_State *L, const femlod_error *err) {
+    luaL_where(L, 1);
+    /* A core function that forgot its message still says what failed. */
+    if (err->message[0] == '\0')
+        lua_pushfstring(L, "femlod: %s error", femlod_status_name(err->status));
+    else
+        lua_pushstring(L, err->message);
+    lua_concat(L, 2);
+    if (err->status == FEMLOD_ELIMIT) {
+        lua_pushvalue(L, -1);
+        lua_setfield(L, LUA_REGISTRYINDEX, LIMIT_KEY);
+    }
+    return lua_error(L);
+}
+
+int fl_lua_is_limit_error(lua_State *L, const char *msg) {
+    int hit = 0;
+    if (msg && lua_getfield(L, LUA_REGISTRYINDEX, LIMIT_KEY) == LUA_TSTRING) {
+        size_t n;
+        const char *limit = lua_tolstring(L, -1, &n);
+        /* The message may have grown a traceback, never a new beginning. */
+        hit = strncmp(msg, limit, n) == 0 && (msg[n] == '\0' || msg[n] == '\n');
+    }
+    lua_pop(L, 1);
+    return hit;
+}
+
+/* {====================================================================
+ * Embedded helpers
+ * ===================================================================== */
+
+static const fl_lua_chunk *find_chunk(const char *module) {
+    for (const fl_lua_chunk *c = fl_lua_embedded; c->module; c++)
+        if (strcmp(c->module, module) == 0) return c;
+    return NULL;
+}
+
+/* Loads and runs a chunk the way require runs a Lua file: with the module
+ * name and the chunk name as its arguments. Text mode only: the sources are
+ * ours, and refusing bytecode costs nothing. */
+static int run_chunk(lua_State *L, const fl_lua_chunk *c) {
+    if (luaL_loadbufferx(L, c->source, c->size, c->chunkname, "t") != LUA_OK) return lua_error(L);
+    lua_pushstring(L, c->module);
+    lua_pushstring(L, c->chunkname);
+    lua_call(L, 2, 1);
+    return 1;
+}
+
+/* package.preload loader; the chunk is the upvalue. */
+static int preload_loader(lua_State *L) {
+    return run_chunk(L, (const fl_lua_chunk *)lua_touserdata(L, lua_upvalueindex(1)));
+}
+
+void fl_lua_preload_helpers(lua_State *L) {
+    luaL_getsubtable(L, LUA_REGISTRYINDEX, LUA_PRELOAD_TABLE);
+    for (const fl_lua_chunk *c = fl_lua_embedded; c->module; c++) {
+        if (lua_getfield(L, -1, c->module) == LUA_TNIL) {
+            lua_pop(L, 1);
+            /* cast: the table is const, the upvalue slot is not; it is only read. */
+            lua_pushlightuserdata(L, (void *)(uintptr_t)c);
+            lua_pushcclosure(L, preload_loader, 1);
+            lua_setfield(L, -2, c->module);
+        } else {
+            lua_pop(L, 1);
+        }
+    }
+    lua_pop(L, 1);
+}
+
+/* Entry for the all-in-one loader (require "femlod.NAME" finding femlod.so).
+ * require has already made sure this name is not loaded. */
+static int open_helper(lua_State *L, const char *module) {
+    const fl_lua_chunk *c = find_chunk(module);
+    if (!c) return luaL_error(L, "module '%s' is not embedded in femlod", module);
+    return run_chunk(L, c);
+}
+
+/* One line per helper in lua/femlod/: the C searcher needs a real symbol. */
+FL_LUA_EXPORT int luaopen_femlod_report(lua_State *L);
+int luaopen_femlod_report(lua_State *L) {
+    return open_helper(L, "femlod.report");
+}
+
+/* }==================================================================== */
+
+int luaopen_femlod(lua_State *L) {
+    luaL_checkversion(L);
+    fl_lua_preload_helpers(L);
+    lua_newtable(L);
+    fl_lmesh_open(L);
+    lua_pushliteral(L, "femlod " FEMLOD_VERSION_STRING);
+    lua_setfield(L, -2, "_VERSION");
+    return 1;
+}

@@ -1,0 +1,433 @@
+/*
+ * lmesh.c - the femlod.Mesh userdata (shaped like liolib.c's file handles).
+ *
+ * A Mesh is a box holding one femlod_mesh pointer. The box is pushed empty,
+ * with its metatable (and so its __gc) in place, before the C mesh is made:
+ * if making it fails or raises, the box is simply an empty box (liolib.c
+ * newprefile). The mesh arrays live outside the Lua heap, so recipes free
+ * them early with `local m <close> = ...` or m:close().
+ *
+ * Every function raises on failure. Tables handed in by the recipe are read
+ * into Lua-owned userdata buffers, so that a raise in the middle (a bad
+ * element) leaks nothing: there is no malloc'd temporary to free.
+ */
+#include "lfemlod.h"
+#include "lopts.h"
+
+#include <limits.h>
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+femlod_mesh **fl_lmesh_box(lua_State *L) {
+    femlod_mesh **p = (femlod_mesh **)lua_newuserdatauv(L, sizeof *p, 0);
+    *p = NULL;
+    luaL_setmetatable(L, FL_MESH_MT);
+    return p;
+}
+
+femlod_mesh *fl_lmesh_check(lua_State *L, int arg) {
+    femlod_mesh **p = (femlod_mesh **)luaL_checkudata(L, arg, FL_MESH_MT);
+    if (!*p) luaL_error(L, "attempt to use a closed femlod.Mesh");
+    return *p;
+}
+
+/* The format option: names as femlod_format_name spells them. */
+static const char *const format_names[] = {"obj", "stl", "stl_ascii", "stl_binary", "off",
+                                           "ply", "ply_ascii", "ply_binary", NULL};
+static const char *const io_keys[] = {"format", NULL};
+
+static femlod_format check_format(lua_State *L, int arg) {
+    fl_opts o;
+    fl_opts_open(&o, L, arg, io_keys);
+    int i = fl_opts_enum(&o, "format", format_names, -1);
+    return i < 0 ? FEMLOD_FORMAT_AUTO : femlod_format_from_name(format_names[i]);
+}
+
+/* A path for the C library: a zero byte would silently cut it short. */
+static const char *check_path(lua_State *L, int arg) {
+    size_t len;
+    const char *path = luaL_checklstring(L, arg, &len);
+    luaL_argcheck(L, strlen(path) == len, arg, "path contains a zero byte");
+    return path;
+}
+
+/* {====================================================================
+ * Module functions: the constructors
+ * ===================================================================== */
+
+static int lib_load(lua_State *L) {
+    const char *path = check_path(L, 1);
+    femlod_read_options opts = FEMLOD_READ_OPTIONS_INIT;
+    opts.format = check_format(L, 2);
+    femlod_mesh **slot = fl_lmesh_box(L);
+    femlod_error err;
+    if (femlod_mesh_read(slot, path, &opts, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    return 1;
+}
+
+/* Reads field[i] (and [j] when nested) as a number; names the element on
+ * error. Leaves the stack as it found it. */
+static double element_number(lua_State *L, int arg, int t, lua_Integer i, const char *field,
+                             lua_Integer outer) {
+    if (lua_geti(L, t, i) != LUA_TNUMBER) {
+        const char *got = luaL_typename(L, -1);
+        if (outer)
+            luaL_argerror(L, arg, lua_pushfstring(L, "%s[%I][%I]: number expected, got %s",
+                                                  field, outer, i, got));
+        luaL_argerror(L, arg,
+                      lua_pushfstring(L, "%s[%I]: number expected, got %s", field, i, got));
+    }
+    double v = lua_tonumber(L, -1);
+    lua_pop(L, 1);
+    return v;
+}
+
+/* A list of triples, flat {a1,b1,c1, a2,...} or nested {{a1,b1,c1}, ...},
+ * told apart by the first element. Pushes a userdata of 3*count doubles and
+ * returns it; count is the number of triples. */
+static double *read_triples(lua_State *L, int arg, int t, const char *field, size_t *count) {
+    lua_Integer n = luaL_len(L, t);
+    int nested = n > 0 && lua_geti(L, t, 1) == LUA_TTABLE;
+    if (n > 0) lua_pop(L, 1);
+    if (!nested && n % 3 != 0)
+        luaL_argerror(L, arg, lua_pushfstring(L, "%s: flat list length %I is not a multiple of 3",
+                                              field, n));
+    lua_Integer triples = nested ? n : n / 3;
+    if ((lua_Unsigned)triples > SIZE_MAX / (3 * sizeof(double)) ||
+        (lua_Unsigned)triples > UINT32_MAX)
+        luaL_argerror(L, arg, lua_pushfstring(L, "%s: too many entries", field));
+    double *v = (double *)lua_newuserdatauv(L, (size_t)triples * 3 * sizeof(double), 0);
+    if (nested) {
+        for (lua_Integer i = 1; i <= n; i++) {
+            if (lua_geti(L, t, i) != LUA_TTABLE)
+                luaL_argerror(L, arg, lua_pushfstring(L, "%s[%I]: table expected, got %s", field,
+                                                      i, luaL_typename(L, -1)));
+            int e = lua_gettop(L);
+            lua_Integer len = luaL_len(L, e);
+            if (len != 3)
+                luaL_argerror(L, arg, lua_pushfstring(L, "%s[%I]: 3 entries expected, got %I",
+                                                      field, i, len));
+            for (lua_Integer j = 1; j <= 3; j++)
+                v[3 * (i - 1) + (j - 1)] = element_number(L, arg, e, j, field, i);
+            lua_pop(L, 1);
+        }
+    } else {
+        for (lua_Integer i = 1; i <= n; i++) v[i - 1] = element_number(L, arg, t, i, field, 0);
+    }
+    *count = (size_t)triples;
+    return v;
+}
+
+/* Names entry k (0-based) of a triple list the way the recipe wrote it. */
+static const char *entry_name(lua_State *L, const char *field, int nested, size_t k) {
+    if (nested)
+        return lua_pushfstring(L, "%s[%I][%I]", field, (lua_Integer)(k / 3 + 1),
+                               (lua_Integer)(k % 3 + 1));
+    return lua_pushfstring(L, "%s[%I]", field, (lua_Integer)(k + 1));
+}
+
+static int is_nested(lua_State *L, int t) {
+    int nested = lua_geti(L, t, 1) == LUA_TTABLE;
+    lua_pop(L, 1);
+    return nested;
+}
+
+static const char *const mesh_keys[] = {"triangles", "positions", NULL};
+
+/* femlod.mesh{positions = ..., triangles = ...}: indices are 1-based, as
+ * everywhere in Lua; they are checked here so that messages use them. */
+static int lib_mesh(lua_State *L) {
+    fl_opts o;
+    luaL_checktype(L, 1, LUA_TTABLE);
+    fl_opts_open(&o, L, 1, mesh_keys);
+
+    size_t nv = 0, nt = 0;
+    const double *pos = NULL, *idx = NULL;
+    int pos_nested = 0, tri_nested = 0;
+    int t = fl_opts_push(&o, "positions");
+    if (t != LUA_TNIL) {
+        if (t != LUA_TTABLE)
+            fl_opts_error(&o, "positions",
+                          lua_pushfstring(L, "table expected, got %s", luaL_typename(L, -1)));
+        pos_nested = is_nested(L, lua_gettop(L));
+        pos = read_triples(L, 1, lua_gettop(L), "positions", &nv);
+    }
+    t = fl_opts_push(&o, "triangles");
+    if (t != LUA_TNIL) {
+        if (t != LUA_TTABLE)
+            fl_opts_error(&o, "triangles",
+                          lua_pushfstring(L, "table expected, got %s", luaL_typename(L, -1)));
+        tri_nested = is_nested(L, lua_gettop(L));
+        idx = read_triples(L, 1, lua_gettop(L), "triangles", &nt);
+    }
+    for (size_t k = 0; k < 3 * nv; k++) {
+        if (!isfinite(pos[k]))
+            luaL_argerror(L, 1, lua_pushfstring(L, "%s: coordinate is not finite",
+                                                entry_name(L, "positions", pos_nested, k)));
+    }
+    uint32_t *tri = (uint32_t *)lua_newuserdatauv(L, 3 * nt * sizeof *tri, 0);
+    for (size_t k = 0; k < 3 * nt; k++) {
+        double d = idx[k];
+        /* Not lua_Integer: a float such as 2.5 must be refused, not rounded. */
+        if (!(d >= 1 && d <= (double)nv && d == floor(d))) {
+            const char *name = entry_name(L, "triangles", tri_nested, k);
+            /* Integral and within +-2^53: exact as an integer, and printed as one. */
+            if (d == floor(d) && fabs(d) <= 9007199254740992.0)
+                luaL_argerror(L, 1, lua_pushfstring(L, "%s: index %I out of range (1..%I)", name,
+                                                    (lua_Integer)d, (lua_Integer)nv));
+            luaL_argerror(L, 1, lua_pushfstring(L, "%s: index %f is not a valid index", name, d));
+        }
+        tri[k] = (uint32_t)d - 1;
+    }
+    /* The core wants real pointers even for empty arrays. */
+    static const double no_positions[3] = {0, 0, 0};
+    if (!pos) pos = no_positions;
+    femlod_mesh **slot = fl_lmesh_box(L);
+    femlod_error err;
+    if (femlod_mesh_create(slot, pos, nv, tri, nt, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    return 1;
+}
+
+/* }==================================================================== */
+
+/* {====================================================================
+ * Methods
+ * ===================================================================== */
+
+static int mesh_save(lua_State *L) {
+    const femlod_mesh *m = fl_lmesh_check(L, 1);
+    const char *path = check_path(L, 2);
+    femlod_write_options opts = FEMLOD_WRITE_OPTIONS_INIT;
+    opts.format = check_format(L, 3);
+    femlod_error err;
+    if (femlod_mesh_write(m, path, &opts, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    return 0;
+}
+
+static void set_number(lua_State *L, const char *key, double v) {
+    lua_pushnumber(L, v);
+    lua_setfield(L, -2, key);
+}
+
+static void set_integer(lua_State *L, const char *key, size_t v) {
+    lua_pushinteger(L, (lua_Integer)v);
+    lua_setfield(L, -2, key);
+}
+
+static void set_boolean(lua_State *L, const char *key, int v) {
+    lua_pushboolean(L, v);
+    lua_setfield(L, -2, key);
+}
+
+static void push_point(lua_State *L, const double p[3]) {
+    lua_createtable(L, 3, 0);
+    for (int i = 0; i < 3; i++) {
+        lua_pushnumber(L, p[i]);
+        lua_rawseti(L, -2, i + 1);
+    }
+}
+
+static void push_bbox(lua_State *L, const double min[3], const double max[3]) {
+    lua_createtable(L, 0, 2);
+    push_point(L, min);
+    lua_setfield(L, -2, "min");
+    push_point(L, max);
+    lua_setfield(L, -2, "max");
+}
+
+/* m:quality([reference]): the report as a table whose keys are the C field
+ * names (topology flattened in). */
+static int mesh_quality(lua_State *L) {
+    const femlod_mesh *m = fl_lmesh_check(L, 1);
+    const femlod_mesh *ref = lua_isnoneornil(L, 2) ? NULL : fl_lmesh_check(L, 2);
+    femlod_quality q;
+    femlod_hausdorff_result h;
+    femlod_error err;
+    /* Both computations before any table: a failure raises with nothing built. */
+    if (femlod_mesh_quality(m, &q, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    if (ref && femlod_mesh_hausdorff(m, ref, NULL, &h, &err) != FEMLOD_OK)
+        return fl_lua_raise(L, &err);
+
+    lua_createtable(L, 0, 40);
+    set_integer(L, "triangles", q.triangles);
+    set_integer(L, "vertices", q.vertices);
+    set_number(L, "stretch_avg", q.stretch_avg);
+    set_number(L, "stretch_min", q.stretch_min);
+    set_number(L, "stretch_max", q.stretch_max);
+    set_number(L, "size_max", q.size_max);
+    set_number(L, "size_min", q.size_min);
+    set_number(L, "size_avg", q.size_avg);
+    set_integer(L, "valence_max", q.valence_max);
+    set_number(L, "valence_avg", q.valence_avg);
+    set_number(L, "angle_min", q.angle_min);
+    set_number(L, "angle_max", q.angle_max);
+    set_integer(L, "degenerate", q.degenerate);
+    set_integer(L, "duplicate", q.duplicate);
+    set_number(L, "area", q.area);
+    push_bbox(L, q.bbox_min, q.bbox_max);
+    lua_setfield(L, -2, "bbox");
+    lua_createtable(L, FEMLOD_HISTOGRAM_BINS, 0);
+    for (int i = 0; i < FEMLOD_HISTOGRAM_BINS; i++) {
+        lua_pushinteger(L, (lua_Integer)q.histogram[i]);
+        lua_rawseti(L, -2, i + 1);
+    }
+    lua_setfield(L, -2, "histogram");
+
+    const femlod_topology *t = &q.topology;
+    set_integer(L, "edges", t->edges);
+    set_integer(L, "boundary_edges", t->boundary_edges);
+    set_integer(L, "nonmanifold_edges", t->nonmanifold_edges);
+    set_integer(L, "nonmanifold_vertices", t->nonmanifold_vertices);
+    set_integer(L, "inconsistent_edges", t->inconsistent_edges);
+    set_integer(L, "isolated_vertices", t->isolated_vertices);
+    set_integer(L, "components", t->components);
+    set_boolean(L, "closed", t->closed);
+    set_boolean(L, "manifold", t->manifold);
+    set_boolean(L, "oriented", t->oriented);
+
+    if (ref) {
+        set_number(L, "hausdorff", h.distance);
+        set_number(L, "hausdorff_rel", h.relative);
+        set_number(L, "hausdorff_forward", h.forward);
+        set_number(L, "hausdorff_backward", h.backward);
+    }
+    return 1;
+}
+
+static int mesh_counts(lua_State *L) {
+    const femlod_mesh *m = fl_lmesh_check(L, 1);
+    lua_createtable(L, 0, 2);
+    set_integer(L, "vertices", femlod_mesh_vertex_count(m));
+    set_integer(L, "triangles", femlod_mesh_triangle_count(m));
+    return 1;
+}
+
+static int mesh_bbox(lua_State *L) {
+    const femlod_mesh *m = fl_lmesh_check(L, 1);
+    double min[3], max[3];
+    femlod_mesh_bbox(m, min, max);
+    push_bbox(L, min, max);
+    return 1;
+}
+
+/* More levels can never succeed on a non-empty mesh (4^16 > UINT32_MAX
+ * triangles), and the bound keeps the count within unsigned. */
+#define MAX_LEVELS 16
+#define MAX_LEVELS_TEXT "16"
+
+static int mesh_subdivide(lua_State *L) {
+    const femlod_mesh *m = fl_lmesh_check(L, 1);
+    lua_Integer levels = luaL_optinteger(L, 2, 1);
+    luaL_argcheck(L, levels >= 0 && levels <= MAX_LEVELS, 2,
+                  "levels out of range (0.." MAX_LEVELS_TEXT ")");
+    femlod_mesh **slot = fl_lmesh_box(L);
+    femlod_error err;
+    if (femlod_mesh_subdivide(slot, m, (unsigned)levels, &err) != FEMLOD_OK)
+        return fl_lua_raise(L, &err);
+    return 1;
+}
+
+static int mesh_copy(lua_State *L) {
+    const femlod_mesh *m = fl_lmesh_check(L, 1);
+    femlod_mesh **slot = fl_lmesh_box(L);
+    femlod_error err;
+    if (femlod_mesh_copy(slot, m, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    return 1;
+}
+
+/* lua_createtable takes an int hint; a bigger count just grows as it goes. */
+static int size_hint(size_t n) {
+    return n > INT_MAX ? 0 : (int)n;
+}
+
+static int mesh_positions(lua_State *L) {
+    const femlod_mesh *m = fl_lmesh_check(L, 1);
+    size_t nv = femlod_mesh_vertex_count(m);
+    const double *p = femlod_mesh_positions(m);
+    lua_createtable(L, size_hint(nv), 0);
+    for (size_t v = 0; v < nv; v++) {
+        push_point(L, p + 3 * v);
+        lua_rawseti(L, -2, (lua_Integer)v + 1);
+    }
+    return 1;
+}
+
+static int mesh_triangles(lua_State *L) {
+    const femlod_mesh *m = fl_lmesh_check(L, 1);
+    size_t nt = femlod_mesh_triangle_count(m);
+    const uint32_t *t = femlod_mesh_triangles(m);
+    lua_createtable(L, size_hint(nt), 0);
+    for (size_t i = 0; i < nt; i++) {
+        lua_createtable(L, 3, 0);
+        for (int c = 0; c < 3; c++) {
+            lua_pushinteger(L, (lua_Integer)t[3 * i + c] + 1);
+            lua_rawseti(L, -2, c + 1);
+        }
+        lua_rawseti(L, -2, (lua_Integer)i + 1);
+    }
+    return 1;
+}
+
+/* __gc, __close and close(): one release that tolerates a closed box, since
+ * __close runs at scope exit even after an explicit close(), and __gc after
+ * both. */
+static int mesh_gc(lua_State *L) {
+    femlod_mesh **p = (femlod_mesh **)luaL_checkudata(L, 1, FL_MESH_MT);
+    femlod_mesh_free(*p);
+    *p = NULL;
+    return 0;
+}
+
+static int mesh_tostring(lua_State *L) {
+    femlod_mesh **p = (femlod_mesh **)luaL_checkudata(L, 1, FL_MESH_MT);
+    if (!*p)
+        lua_pushliteral(L, "femlod.Mesh (closed)");
+    else
+        lua_pushfstring(L, "femlod.Mesh (%I triangles, %I vertices)",
+                        (lua_Integer)femlod_mesh_triangle_count(*p),
+                        (lua_Integer)femlod_mesh_vertex_count(*p));
+    return 1;
+}
+
+/* }==================================================================== */
+
+static const luaL_Reg lib_functions[] = {
+    {"load", lib_load},
+    {"mesh", lib_mesh},
+    {NULL, NULL},
+};
+
+static const luaL_Reg mesh_methods[] = {
+    {"save", mesh_save},
+    {"quality", mesh_quality},
+    {"counts", mesh_counts},
+    {"bbox", mesh_bbox},
+    {"subdivide", mesh_subdivide},
+    {"copy", mesh_copy},
+    {"positions", mesh_positions},
+    {"triangles", mesh_triangles},
+    {"close", mesh_gc},
+    {NULL, NULL},
+};
+
+static const luaL_Reg mesh_meta[] = {
+    {"__index", NULL}, /* placeholder, set to the method table below */
+    {"__gc", mesh_gc},
+    {"__close", mesh_gc},
+    {"__tostring", mesh_tostring},
+    {NULL, NULL},
+};
+
+void fl_lmesh_open(lua_State *L) {
+    /* A second luaopen_femlod in the same state (package.loaded cleared)
+     * reuses the metatable, so existing meshes keep working. */
+    if (luaL_newmetatable(L, FL_MESH_MT)) {
+        luaL_setfuncs(L, mesh_meta, 0);
+        luaL_newlibtable(L, mesh_methods);
+        luaL_setfuncs(L, mesh_methods, 0);
+        lua_setfield(L, -2, "__index");
+    }
+    lua_pop(L, 1);
+    luaL_setfuncs(L, lib_functions, 0);
+}

@@ -1,0 +1,76 @@
+/* bench_io.c - reading speed: a ~1.25M-triangle binary STL (cover.obj
+ * subdivided twice, written by femlod) and the OBJ meshes of examples/data.
+ * Prints the median of several runs; never asserts a time (see docs/testing.md).
+ * Usage: bench_io [DATA_DIR] [TMP_DIR] */
+#include "femlod.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <sys/resource.h>
+#include <time.h>
+
+static double now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int cmp_double(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Median seconds of `runs` loads of path; prints the counts once. */
+static double time_load(const char *path, int runs) {
+    double t[15];
+    if (runs > 15) runs = 15;
+    for (int r = 0; r < runs; r++) {
+        femlod_mesh *m = NULL;
+        femlod_error err;
+        double t0 = now();
+        if (femlod_mesh_read(&m, path, NULL, &err) != FEMLOD_OK) {
+            fprintf(stderr, "bench_io: %s\n", err.message);
+            exit(1);
+        }
+        t[r] = now() - t0;
+        if (r == 0)
+            printf("  %s: %zu triangles, %zu vertices\n", path, femlod_mesh_triangle_count(m),
+                   femlod_mesh_vertex_count(m));
+        femlod_mesh_free(m);
+    }
+    qsort(t, (size_t)runs, sizeof t[0], cmp_double);
+    return t[runs / 2];
+}
+
+int main(int argc, char **argv) {
+    const char *data = argc > 1 ? argv[1] : "examples/data";
+    const char *tmp = argc > 2 ? argv[2] : "/tmp";
+    char path[4096], stl[4096];
+    snprintf(path, sizeof path, "%s/cover.obj", data);
+    snprintf(stl, sizeof stl, "%s/femlod-bench-cover4.stl", tmp);
+
+    femlod_mesh *cover = NULL, *dense = NULL;
+    femlod_error err;
+    if (femlod_mesh_read(&cover, path, NULL, &err) != FEMLOD_OK ||
+        femlod_mesh_subdivide(&dense, cover, 2, &err) != FEMLOD_OK ||
+        femlod_mesh_write(dense, stl, NULL, &err) != FEMLOD_OK) {
+        fprintf(stderr, "bench_io: %s\n", err.message);
+        return 1;
+    }
+    femlod_mesh_free(cover);
+    femlod_mesh_free(dense);
+
+    printf("reading (median of 7 runs)\n");
+    double t_stl = time_load(stl, 7);
+    printf("  binary STL: %.3f s (%.0f ns per triangle)\n", t_stl, t_stl * 1e9 / (77874.0 * 16));
+    const char *objs[] = {"cover.obj", "bunny.obj", "fandisk.obj"};
+    for (int i = 0; i < 3; i++) {
+        snprintf(path, sizeof path, "%s/%s", data, objs[i]);
+        printf("  OBJ %s: %.3f s\n", objs[i], time_load(path, 7));
+    }
+    struct rusage ru;
+    getrusage(RUSAGE_SELF, &ru);
+    printf("peak resident memory: %.1f MiB\n", (double)ru.ru_maxrss / 1024.0);
+    remove(stl);
+    return 0;
+}

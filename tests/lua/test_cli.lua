@@ -1,0 +1,335 @@
+-- test_cli.lua: the femlod program from outside: exit codes (0 ok, 1 error,
+-- 2 usage), what goes to stdout and to stderr, the options-command-pairs
+-- grammar, parameter conversion, -e, info, convert, --seed.
+
+local T = dofile((arg[0]:match("^(.*)/") or ".") .. "/check.lua")
+
+local P = params
+assert(P and P.femlod and P.tmp and P.shared and P.examples, "run through ctest: needs femlod=, tmp=, shared=, examples=")
+local FEMLOD = P.femlod
+local function path(name) return P.tmp .. "/cli_" .. name end
+
+local function quote(s) return "'" .. tostring(s):gsub("'", "'\\''") .. "'" end
+
+-- Runs femlod with the arguments; returns exit code, stdout, stderr.
+local ERR = path("stderr.txt")
+local function run(...)
+  local parts = { quote(FEMLOD) }
+  for i = 1, select("#", ...) do parts[#parts + 1] = quote((select(i, ...))) end
+  local p = assert(io.popen(table.concat(parts, " ") .. " 2>" .. quote(ERR) .. " </dev/null", "r"))
+  local out = p:read("a")
+  local _, how, code = p:close()
+  T.check(how == "exit", "femlod ended by a signal: " .. tostring(code))
+  return code, out, T.readfile(ERR) or ""
+end
+
+-- A recipe file in tmp.
+local function recipe(name, text)
+  local p = path(name)
+  T.writefile(p, text)
+  return p
+end
+
+-- {====== --version, --help
+do
+  local code, out, err = run("--version")
+  T.eq(code, 0, "--version exit")
+  T.check(out:find("^femlod 0%.1%.0 %(Lua 5%.4%.%d+%)\n$"), "--version text: " .. out)
+  T.eq(err, "", "--version: nothing on stderr")
+  T.eq(select(2, run("-v")), out, "-v is --version")
+  code, out, err = run("--help")
+  T.eq(code, 0, "--help exit")
+  T.eq(err, "", "--help: nothing on stderr")
+  for _, want in ipairs { "^usage: femlod %[options%] COMMAND", "\n  run RECIPE%.lua ", "\n  info MESH ",
+    "\n  convert IN OUT ", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-%-quiet ", "\n  %-%-traceback ",
+    "Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded" } do
+    T.check(out:find(want), "--help mentions " .. want)
+  end
+  T.eq(select(2, run("-h")), out, "-h is --help")
+  T.eq(select(2, run("help")), out, "help command")
+end
+-- }======
+
+-- {====== usage errors: exit 2, stdout empty, the problem on stderr's first line
+local function usage(expect_first_line, ...)
+  local code, out, err = run(...)
+  local args = table.concat({ ... }, " ")
+  T.eq(code, 2, "exit 2 for: " .. args)
+  T.eq(out, "", "stdout empty for: " .. args)
+  T.eq(err:match("^[^\n]*"), expect_first_line, "message for: " .. args)
+  T.check(err:find("\nusage: femlod ") ~= nil, "usage line for: " .. args)
+end
+usage("femlod: no command given")
+usage("femlod: unknown option '--bogus'", "--bogus")
+usage("femlod: unknown option '--bogus'", "--quiet", "--bogus", "run", "x.lua")
+usage("femlod: unknown command 'frobnicate'", "frobnicate")
+usage("femlod: missing a recipe", "run")
+usage("femlod: missing a line of Lua", "-e")
+usage("femlod: missing a mesh file", "info")
+usage("femlod: missing an input and an output file", "convert", "a.obj")
+usage("femlod: --seed needs a value", "--seed")
+usage("femlod: --seed: integer expected, got 'abc'", "--seed", "abc", "-e", "")
+usage("femlod: --seed: integer expected, got '1.5'", "--seed=1.5", "-e", "")
+usage("femlod: expected name=value, got 'notapair'", "-e", "", "notapair")
+usage("femlod: expected name=value, got '=3'", "-e", "", "=3")
+usage("femlod: parameter given twice: 'a=2'", "-e", "", "a=1", "a=2")
+usage("femlod: unknown parameter 'bogus' (valid: format, reference, report)", "info", "x.obj", "bogus=1")
+usage("femlod: report: unknown report 'xml' (valid: text, row, fields)", "info", "x.obj", "report=xml")
+usage("femlod: format: unknown format 'xyz' (valid: obj, stl, stl_ascii, stl_binary, off, ply, ply_ascii, ply_binary)",
+  "convert", "a.obj", "b.obj", "format=xyz")
+usage("femlod: unknown parameter 'formt' (valid: format, input_format)", "convert", "a.obj", "b.obj", "formt=obj")
+-- Options come first: after the command they are operands or pairs.
+usage("femlod: expected name=value, got '--quiet'", "-e", "", "--quiet")
+-- }======
+
+-- {====== recipes: errors give file:line, exit 1
+do
+  local p = recipe("boom.lua", "local femlod = require 'femlod'\nlocal x = 1\nerror('boom')\n")
+  local code, out, err = run("run", p)
+  T.eq(code, 1, "recipe error exit 1")
+  T.eq(out, "", "nothing on stdout")
+  T.eq(err, "femlod: " .. p .. ":3: boom\n", "one line, with file:line")
+
+  -- The same through the API: the position is the recipe's calling line.
+  p = recipe("api.lua", "local femlod = require 'femlod'\n\nlocal m = femlod.load(nil)\n")
+  code, out, err = run("run", p)
+  T.eq(code, 1, "API error exit 1")
+  T.eq(err, "femlod: " .. p .. ":3: bad argument #1 to 'load' (string expected, got nil)\n", "API error text")
+
+  local missing = path("missing.obj")
+  p = recipe("load.lua", "local femlod = require 'femlod'\nlocal m = femlod.load(...)\n")
+  code, out, err = run("run", p, "unused=1")
+  T.eq(code, 1, "load error exit 1")
+  -- varargs are the pairs: femlod.load("unused=1") fails with an unknown extension
+  T.eq(err, "femlod: " .. p .. ":2: unused=1: unknown file extension; supported: .obj, .stl, .off, .ply (or give the format)\n",
+    "load error names recipe line and file")
+
+  -- An error inside a function is placed where it happened; --traceback adds the stack.
+  p = recipe("deep.lua", "local function f(x)\n  return x.field\nend\nf(nil)\n")
+  code, out, err = run("run", p)
+  T.eq(code, 1, "runtime error exit 1")
+  T.check(err:find("^femlod: " .. p:gsub("%p", "%%%0") .. ":2: attempt to index a nil value %(local 'x'%)\n$"),
+    "runtime error text: " .. err)
+  code, out, err = run("--traceback", "run", p)
+  T.eq(code, 1, "with traceback exit 1")
+  T.check(err:find("^femlod: " .. p:gsub("%p", "%%%0") .. ":2: attempt to index"), "traceback keeps the first line")
+  T.check(err:find("\nstack traceback:\n"), "--traceback prints the stack")
+  T.check(err:find(":4: in main chunk"), "the stack names the calling line")
+
+  -- Syntax errors, missing recipes, bytecode.
+  p = recipe("syntax.lua", "local x = = 1\n")
+  code, out, err = run("run", p)
+  T.eq(code, 1, "syntax error exit 1")
+  T.check(err:find("^femlod: " .. p:gsub("%p", "%%%0") .. ":1: unexpected symbol near '='\n$"), "syntax error: " .. err)
+  code, out, err = run("run", path("no_such_recipe.lua"))
+  T.eq(code, 1, "missing recipe exit 1")
+  T.check(err:find("^femlod: cannot open " .. path("no_such_recipe.lua"):gsub("%p", "%%%0")), "missing recipe: " .. err)
+  p = path("bytecode.lua")
+  T.writefile(p, string.dump(function() print("ran") end))
+  code, out, err = run("run", p)
+  T.eq(code, 1, "bytecode refused")
+  T.eq(out, "", "bytecode did not run")
+  T.check(err:find("attempt to load a binary chunk %(mode is 't'%)"), "bytecode message: " .. err)
+
+  -- Error values that are not strings.
+  p = recipe("table_error.lua", "error({})\n")
+  T.eq(select(3, run("run", p)), "femlod: (error object is a table value)\n", "table error value")
+  p = recipe("tostring_error.lua", "error(setmetatable({}, { __tostring = function() return 'custom' end }))\n")
+  T.eq(select(3, run("run", p)), "femlod: custom\n", "__tostring error value")
+
+  -- os.exit passes its status through; a recipe's output reaches stdout.
+  p = recipe("exit.lua", "print('before')\nos.exit(7)\n")
+  code, out = run("run", p)
+  T.eq(code, 7, "os.exit status")
+  T.eq(out, "before\n", "output before os.exit")
+end
+-- }======
+
+-- {====== exit 3: a limit was exceeded
+do
+  -- An OFF header declaring more vertices than 32-bit indices can number.
+  local huge = path("huge.off")
+  T.writefile(huge, "OFF\n5000000000 1 0\n")
+  local code, out, err = run("info", huge)
+  T.eq(code, 3, "info: limit exit 3")
+  T.check(err:find("^femlod: " .. huge:gsub("%p", "%%%0") .. ":2: .*limit") ~= nil, "limit message: " .. err)
+  code = run("-e", "femlod.load(...)", "p=" .. huge)
+  T.eq(code, 1, "varargs are the raw 'p=...' strings: no such file, exit 1")
+  code, out, err = run("-e", "femlod.load(params.p)", "p=" .. huge)
+  T.eq(code, 3, "recipe dying of a limit: exit 3")
+  T.check(err:find("^femlod: %(command line%):1: "), "with the recipe position: " .. err)
+  T.eq(run("--traceback", "-e", "femlod.load(params.p)", "p=" .. huge), 3, "exit 3 with a traceback too")
+  T.eq(run("-e", "local ok, e = pcall(femlod.load, params.p); error(e, 0)", "p=" .. huge), 3,
+    "the limit error re-raised: exit 3")
+  T.eq(run("-e", "pcall(femlod.load, params.p); error('other')", "p=" .. huge), 1,
+    "a limit error caught, then another error: exit 1")
+  T.eq(run("-e", "pcall(femlod.load, params.p)", "p=" .. huge), 0, "a limit error caught: success")
+end
+-- }======
+
+-- {====== params, arg, varargs, the global femlod
+do
+  local p = recipe("params.lua", [[
+local keys = {}
+for k in pairs(params) do keys[#keys + 1] = k end
+table.sort(keys)
+for _, k in ipairs(keys) do
+  local v = params[k]
+  io.write(k, "=", math.type(v) or type(v), ":", tostring(v), "\n")
+end
+io.write("arg0=", arg[0], " arg-1=", arg[-1], " arg1=", arg[1], " n=", select("#", ...), " first=", (...), "\n")
+io.write("global=", tostring(femlod == require "femlod"), "\n")
+]])
+  local code, out, err = run("run", p, "n=3", "f=2.5", "e=1e3", "h=0x10", "neg=-4", "dot=.5", "t=true", "fa=false",
+    "s=hello", "eq=a=b", "empty=", "sp=a b", "nan=nan", "inf=inf", "up=TRUE", "comma=1,5", "ws= 7 ")
+  T.eq(code, 0, "params recipe runs")
+  T.eq(err, "", "params: nothing on stderr")
+  T.eq(out, table.concat({
+    "comma=string:1,5", "dot=float:0.5", "e=float:1000.0", "empty=string:", "eq=string:a=b", "f=float:2.5",
+    "fa=boolean:false", "h=integer:16", "inf=string:inf", "n=integer:3", "nan=string:nan", "neg=integer:-4",
+    "s=string:hello", "sp=string:a b", "t=boolean:true", "up=string:TRUE", "ws=integer:7",
+    "arg0=" .. p .. " arg-1=run arg1=n=3 n=17 first=n=3", "global=true", "" }, "\n"), "params converted as Lua does")
+
+  -- femlod RECIPE.lua is femlod run RECIPE.lua, without "run" in arg.
+  code, out = run(p, "x=1")
+  T.eq(code, 0, "recipe without run")
+  T.check(out:find("\nx=integer:1\n", 1, true) or out:find("^x=integer:1\n"), "recipe without run gets params")
+  T.check(out:find("arg0=" .. p .. " arg-1=" .. FEMLOD .. " arg1=x=1", 1, true), "arg table without run: " .. out)
+
+  -- -e: a line of Lua with params and the global femlod.
+  code, out, err = run("-e", "print(params.x + 1, femlod._VERSION, arg[0] ~= nil)", "x=41")
+  T.eq(code, 0, "-e runs")
+  T.eq(out, "42\tfemlod 0.1.0\ttrue\n", "-e output")
+  code, out, err = run("-e", "error('bad')")
+  T.eq(code, 1, "-e error exit 1")
+  T.eq(err, "femlod: (command line):1: bad\n", "-e error text")
+  code, out = run("--", "-e", "print'after --'")
+  T.eq(out, "after --\n", "-- ends the options")
+  -- a recipe from standard input
+  local pipe = assert(io.popen("echo 'print(params.k * 2)' | " .. quote(FEMLOD) .. " run - k=21 2>" .. quote(ERR)))
+  T.eq(pipe:read("a"), "42\n", "recipe from stdin")
+  pipe:close()
+end
+-- }======
+
+-- {====== --seed: runs repeat
+do
+  local p = recipe("random.lua", "print(math.random(1, 1000000000), math.random(), math.random(1, 6))\n")
+  local _, a = run("--seed", "42", "run", p)
+  local _, b = run("--seed=42", "run", p)
+  local _, c = run("--seed", "43", "run", p)
+  local _, d = run("run", p)
+  local _, e = run("run", p)
+  local _, z = run("--seed", "0", "run", p)
+  T.check(a ~= "", "random recipe printed")
+  T.eq(b, a, "same seed, same numbers")
+  T.check(c ~= a, "another seed, other numbers")
+  T.eq(e, d, "without --seed runs repeat")
+  T.eq(d, z, "the default seed is 0")
+  -- --seed N is math.randomseed(N): the same numbers as here, in this process.
+  local function expected(seed)
+    math.randomseed(seed)
+    local x, y, z = math.random(1, 1000000000), math.random(), math.random(1, 6)
+    return tostring(x) .. "\t" .. tostring(y) .. "\t" .. tostring(z) .. "\n"
+  end
+  T.eq(a, expected(42), "--seed 42 is math.randomseed(42)")
+  T.eq(d, expected(0), "no --seed is math.randomseed(0)")
+  local _, neg = run("--seed", "-5", "-e", "print(math.random(100))")
+  T.check(neg:find("^%d+\n$"), "negative seeds are integers too")
+end
+-- }======
+
+-- {====== info
+local fandisk = P.examples .. "/data/fandisk.obj"
+do
+  local code, out, err = run("info", fandisk)
+  T.eq(code, 0, "info exit")
+  T.eq(err, "", "info: nothing on stderr")
+  T.check(out:find("^fandisk%.obj: 12946 triangles, 6475 vertices\n"), "info first line: " .. out:match("^[^\n]*"))
+  T.check(out:find("\n  stretch     avg 0%.744457  min 0%.355561 "), "info stretch line")
+  T.check(out:find("\n  valence     avg [%d.]+  max 9\n"), "info valence line")
+  T.check(out:find("\n  topology    closed, manifold, oriented; 1 component"), "info topology line")
+  T.check(out:find("\n  stretch histogram:\n"), "info histogram")
+  T.check(not out:find("hausdorff"), "no hausdorff without reference")
+  code, out = run("info", fandisk, "report=row")
+  T.eq(out, "fandisk.obj (0.9206 x 0.5111 x 1) | - | 12946 | 0.744, 0.356 | 0.05466 | 9\n", "info report=row")
+  code, out = run("info", fandisk, "report=fields")
+  T.check(out:find("\ntriangles 12946\n") and out:find("\nvalence_max 9\n") and out:find("\nclosed true\n"),
+    "info report=fields")
+  code, out = run("info", fandisk, "reference=" .. fandisk)
+  T.eq(code, 0, "info with a reference")
+  T.check(out:find("\n  hausdorff   [%d.e+-]+ %("), "info prints the hausdorff line with a reference")
+  -- format= reads a file whose extension says nothing.
+  local copy = path("fandisk.mesh")
+  T.writefile(copy, T.readfile(fandisk))
+  code, out = run("info", copy, "format=obj")
+  T.eq(code, 0, "info format=obj")
+  T.check(out:find("^cli_fandisk%.mesh: 12946 triangles"), "info format=obj output")
+  code, out, err = run("info", copy)
+  T.eq(code, 1, "info of an unknown extension fails")
+  T.eq(err, "femlod: " .. copy .. ": unknown file extension; supported: .obj, .stl, .off, .ply (or give the format)\n",
+    "info error has no recipe position")
+  code, out, err = run("info", path("missing.obj"))
+  T.eq(code, 1, "info of a missing file")
+  T.eq(out, "", "info of a missing file prints no report")
+  T.eq(err, "femlod: " .. path("missing.obj") .. ": cannot open: No such file or directory\n", "info missing file text")
+  -- The quickstart example: what README tells a newcomer to run.
+  code, out, err = run(P.examples .. "/quickstart.lua")
+  T.eq(code, 0, "quickstart runs")
+  T.eq(err, "", "quickstart: nothing on stderr")
+  T.check(out:find("^fandisk%.obj: 12946 triangles, 6475 vertices\n"), "quickstart prints the report")
+  code, out = run(P.examples .. "/quickstart.lua", "mesh=" .. P.shared .. "/sphereWithHole.stl")
+  T.check(out:find("^sphereWithHole%.stl: 285 triangles, 146 vertices\n"), "quickstart mesh=PATH")
+end
+-- }======
+
+-- {====== convert
+do
+  local stl, back = path("fandisk.stl"), path("fandisk_back.obj")
+  os.remove(stl)
+  local code, out, err = run("convert", fandisk, stl)
+  T.eq(code, 0, "convert exit")
+  T.eq(err, "", "convert: nothing on stderr")
+  T.eq(out, stl .. ": 12946 triangles, 6475 vertices (stl)\n", "convert summary")
+  T.eq(#(T.readfile(stl) or ""), 84 + 50 * 12946, "binary STL written")
+  code, out = run("--quiet", "convert", stl, back)
+  T.eq(code, 0, "convert back")
+  T.eq(out, "", "--quiet: no summary")
+  local _, a = run("info", fandisk, "report=fields")
+  local _, b = run("info", back, "report=fields")
+  T.eq(a:match("\ntriangles %d+\n"), b:match("\ntriangles %d+\n"), "same triangles after OBJ -> STL -> OBJ")
+  T.eq(a:match("\nvertices %d+\n"), b:match("\nvertices %d+\n"), "same vertices after OBJ -> STL -> OBJ")
+  T.eq(a:match("\nclosed %a+\n"), b:match("\nclosed %a+\n"), "same topology")
+
+  local ascii = path("fandisk_ascii.stl")
+  code, out = run("convert", fandisk, ascii, "format=stl_ascii")
+  T.eq(out, ascii .. ": 12946 triangles, 6475 vertices (stl_ascii)\n", "convert format=stl_ascii summary")
+  T.eq((T.readfile(ascii) or ""):sub(1, 5), "solid", "format=stl_ascii wrote ASCII")
+  local ply, off = path("fandisk.ply"), path("fandisk.off")
+  T.eq(run("convert", ascii, ply), 0, "STL -> PLY")
+  T.eq(run("convert", ply, off), 0, "PLY -> OFF")
+  local _, c = run("info", off, "report=fields")
+  T.eq(c:match("\nstretch_avg [%d.]+\n"), a:match("\nstretch_avg [%d.]+\n"), "quality survives STL, PLY, OFF")
+  local data = path("fandisk.data")
+  T.eq(run("convert", off, data, "format=obj", "input_format=off"), 0, "convert with both formats given")
+  T.eq((T.readfile(data) or ""):sub(1, 2) ~= "OF", true, "format= decides the output format")
+
+  -- A failed convert leaves no output file, and never clobbers one.
+  local bad, out_file = path("bad.obj"), path("never.stl")
+  T.writefile(bad, "v 0 0 0\nv 1 0 0\nf 1 2 3\n")
+  os.remove(out_file)
+  code, out, err = run("convert", bad, out_file)
+  T.eq(code, 1, "convert of a bad file fails")
+  T.eq(out, "", "no summary for a failed convert")
+  T.check(err:find("^femlod: " .. bad:gsub("%p", "%%%0") .. ":3: "), "the error names the bad line: " .. err)
+  T.check(not T.exists(out_file), "no output file after a failed convert")
+  T.writefile(out_file, "keep me")
+  T.eq(run("convert", bad, out_file), 1, "failed convert over an existing file")
+  T.eq(T.readfile(out_file), "keep me", "existing output untouched")
+  code, out, err = run("convert", fandisk, P.tmp .. "/no_such_dir/x.stl")
+  T.eq(code, 1, "convert into a missing folder fails")
+  T.check(not T.exists(P.tmp .. "/no_such_dir/x.stl"), "nothing written")
+end
+-- }======
+
+T.summary("test_cli")
