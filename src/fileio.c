@@ -143,20 +143,19 @@ femlod_status fl_out_open(fl_out *o, const char *path, femlod_error *err) {
     if (fd < 0) {
         int e = errno;
         free(tmp);
-        return fl_error(err, FEMLOD_EIO, "%s: cannot create temporary file: %s", path,
-                        strerror(e));
+        return fl_error(err, FEMLOD_EIO, "%s: cannot create temporary file: %s", path, strerror(e));
     }
     /* Replacing a file keeps its permissions; a new file gets the usual ones. */
     struct stat st;
     mode_t mode = (stat(path, &st) == 0 && S_ISREG(st.st_mode)) ? (mode_t)(st.st_mode & 07777)
-                                                                 : default_mode();
+                                                                : default_mode();
     if (fchmod(fd, mode) != 0) {
         int e = errno;
         close(fd);
         unlink(tmp);
         free(tmp);
-        return fl_error(err, FEMLOD_EIO, "%s: cannot set permissions of temporary file: %s",
-                        path, strerror(e));
+        return fl_error(err, FEMLOD_EIO, "%s: cannot set permissions of temporary file: %s", path,
+                        strerror(e));
     }
     FILE *fp = fdopen(fd, "wb");
     if (!fp) {
@@ -316,8 +315,9 @@ double fl_strtod(const char *s, char **end) {
         const char *q = p + w;
         if (*q == '(') {
             const char *r = q + 1;
-            while ((*r >= '0' && *r <= '9') || (lower((unsigned char)*r) >= 'a' &&
-                                                lower((unsigned char)*r) <= 'z') || *r == '_')
+            while ((*r >= '0' && *r <= '9') ||
+                   (lower((unsigned char)*r) >= 'a' && lower((unsigned char)*r) <= 'z') ||
+                   *r == '_')
                 r++;
             if (*r == ')') q = r + 1;
         }
@@ -328,8 +328,8 @@ double fl_strtod(const char *s, char **end) {
     /* Decimal form only: "0x1p3" stops after the "0", as hex floats are not
      * accepted in mesh files (ecosystem-notes.md 5.2). */
     uint64_t m = 0;
-    int nd = 0;          /* significant digits held in m */
-    int truncated = 0;   /* nonzero digits beyond the 19 that m holds */
+    int nd = 0;        /* significant digits held in m */
+    int truncated = 0; /* nonzero digits beyond the 19 that m holds */
     long exp10 = 0;
     int any = 0;
     while (*p >= '0' && *p <= '9') {

@@ -14,10 +14,14 @@ static const struct {
     femlod_format format;
     const char *name;
 } format_names[] = {
-    {FEMLOD_FORMAT_OBJ, "obj"},       {FEMLOD_FORMAT_STL, "stl"},
-    {FEMLOD_FORMAT_STL_ASCII, "stl_ascii"}, {FEMLOD_FORMAT_STL_BINARY, "stl_binary"},
-    {FEMLOD_FORMAT_OFF, "off"},       {FEMLOD_FORMAT_PLY, "ply"},
-    {FEMLOD_FORMAT_PLY_ASCII, "ply_ascii"}, {FEMLOD_FORMAT_PLY_BINARY, "ply_binary"},
+    {FEMLOD_FORMAT_OBJ, "obj"},
+    {FEMLOD_FORMAT_STL, "stl"},
+    {FEMLOD_FORMAT_STL_ASCII, "stl_ascii"},
+    {FEMLOD_FORMAT_STL_BINARY, "stl_binary"},
+    {FEMLOD_FORMAT_OFF, "off"},
+    {FEMLOD_FORMAT_PLY, "ply"},
+    {FEMLOD_FORMAT_PLY_ASCII, "ply_ascii"},
+    {FEMLOD_FORMAT_PLY_BINARY, "ply_binary"},
 };
 
 #define SUPPORTED_EXTENSIONS ".obj, .stl, .off, .ply"
@@ -129,7 +133,8 @@ femlod_status femlod_mesh_read_memory(femlod_mesh **out, const void *data, size_
      * need not have. */
     if (size == SIZE_MAX) return fl_error(err, FEMLOD_ENOMEM, "%s: too large", name);
     char *copy = fl_alloc(size + 1, 1);
-    if (!copy) return fl_error(err, FEMLOD_ENOMEM, "%s: out of memory copying %zu bytes", name, size);
+    if (!copy)
+        return fl_error(err, FEMLOD_ENOMEM, "%s: out of memory copying %zu bytes", name, size);
     if (size) memcpy(copy, data, size);
     copy[size] = '\0';
     femlod_status s = dispatch_read(out, copy, size, name, f, err);
@@ -203,8 +208,7 @@ int fl_io_coord(const char *s, size_t n, double *out, char *why, size_t why_size
         return 0;
     }
     if (isinf(x)) {
-        snprintf(why, why_size, "coordinate '%s' is out of range",
-                 fl_io_quote(q, sizeof q, s, n));
+        snprintf(why, why_size, "coordinate '%s' is out of range", fl_io_quote(q, sizeof q, s, n));
         return 0;
     }
     *out = x;

@@ -63,9 +63,7 @@ static void skip_blank(obj_reader *r) {
 }
 
 /* End of statement: end of data, newline or a comment. Call after skip_blank. */
-static int at_eos(const obj_reader *r) {
-    return r->p == r->end || *r->p == '\n' || *r->p == '#';
-}
+static int at_eos(const obj_reader *r) { return r->p == r->end || *r->p == '\n' || *r->p == '#'; }
 
 /* Consumes the rest of a statement known to be at_eos. */
 static void end_statement(obj_reader *r) {
@@ -123,8 +121,7 @@ static femlod_status read_vertex(obj_reader *r) {
         fl_strtod(s, &e);
         if (e != s + n)
             return fail(r, FEMLOD_EPARSE, "bad number '%s'", fl_io_quote(q, sizeof q, s, n));
-        if (extra == 4)
-            return fail(r, FEMLOD_EPARSE, "too many values on a 'v' line (at most 7)");
+        if (extra == 4) return fail(r, FEMLOD_EPARSE, "too many values on a 'v' line (at most 7)");
     }
     end_statement(r);
     if (r->b.nv >= UINT32_MAX)
@@ -235,12 +232,11 @@ static femlod_status read_face(obj_reader *r) {
  * grouping, materials, lines, points and the free-form geometry of the spec. */
 static int ignored_keyword(const char *s, size_t n) {
     static const char *const words[] = {
-        "vt",      "vn",       "vp",       "g",        "o",      "s",         "mg",
-        "usemtl",  "mtllib",   "l",        "p",        "cstype", "deg",       "bmat",
-        "step",    "curv",     "curv2",    "surf",     "parm",   "trim",      "hole",
-        "scrv",    "sp",       "end",      "con",      "ctech",  "stech",     "bevel",
-        "c_interp", "d_interp", "lod",     "maplib",   "usemap", "shadow_obj", "trace_obj",
-        "call",    "csh",      "res",
+        "vt",     "vn",         "vp",        "g",      "o",        "s",        "mg",   "usemtl",
+        "mtllib", "l",          "p",         "cstype", "deg",      "bmat",     "step", "curv",
+        "curv2",  "surf",       "parm",      "trim",   "hole",     "scrv",     "sp",   "end",
+        "con",    "ctech",      "stech",     "bevel",  "c_interp", "d_interp", "lod",  "maplib",
+        "usemap", "shadow_obj", "trace_obj", "call",   "csh",      "res",
     };
     for (size_t i = 0; i < sizeof words / sizeof words[0]; i++)
         if (strlen(words[i]) == n && memcmp(words[i], s, n) == 0) return 1;

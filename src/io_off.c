@@ -155,8 +155,7 @@ static femlod_status parse(off_reader *r, fl_meshbuf *b) {
     femlod_status st = read_header(r, &nv, &nf);
     if (st != FEMLOD_OK) return st;
     if (!fl_meshbuf_reserve(b, (size_t)nv, (size_t)nf))
-        return fail(r, FEMLOD_ENOMEM, "out of memory for %llu vertices",
-                    (unsigned long long)nv);
+        return fail(r, FEMLOD_ENOMEM, "out of memory for %llu vertices", (unsigned long long)nv);
     char why[128], q[48];
     size_t n;
     const char *s;

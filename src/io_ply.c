@@ -19,10 +19,10 @@ static const struct {
     const char *name;
     ply_type type;
 } type_names[] = {
-    {"char", T_I8},    {"int8", T_I8},     {"uchar", T_U8},   {"uint8", T_U8},
-    {"short", T_I16},  {"int16", T_I16},   {"ushort", T_U16}, {"uint16", T_U16},
-    {"int", T_I32},    {"int32", T_I32},   {"uint", T_U32},   {"uint32", T_U32},
-    {"float", T_F32},  {"float32", T_F32}, {"double", T_F64}, {"float64", T_F64},
+    {"char", T_I8},   {"int8", T_I8},     {"uchar", T_U8},   {"uint8", T_U8},
+    {"short", T_I16}, {"int16", T_I16},   {"ushort", T_U16}, {"uint16", T_U16},
+    {"int", T_I32},   {"int32", T_I32},   {"uint", T_U32},   {"uint32", T_U32},
+    {"float", T_F32}, {"float32", T_F32}, {"double", T_F64}, {"float64", T_F64},
 };
 
 static size_t type_size(ply_type t) {
@@ -66,10 +66,9 @@ typedef struct ply_reader {
     fl_meshbuf b;
 } ply_reader;
 
-static femlod_status fail_line(ply_reader *r, size_t line, femlod_status st, const char *fmt,
-                               ...) FL_PRINTF(4, 5);
-static femlod_status fail_line(ply_reader *r, size_t line, femlod_status st, const char *fmt,
-                               ...) {
+static femlod_status fail_line(ply_reader *r, size_t line, femlod_status st, const char *fmt, ...)
+    FL_PRINTF(4, 5);
+static femlod_status fail_line(ply_reader *r, size_t line, femlod_status st, const char *fmt, ...) {
     char msg[FEMLOD_ERROR_MESSAGE_SIZE];
     va_list ap;
     va_start(ap, fmt);
@@ -78,8 +77,7 @@ static femlod_status fail_line(ply_reader *r, size_t line, femlod_status st, con
     return fl_error(r->err, st, "%s:%zu: %s", r->name, line, msg);
 }
 
-static femlod_status fail_byte(ply_reader *r, const char *at, const char *fmt, ...)
-    FL_PRINTF(3, 4);
+static femlod_status fail_byte(ply_reader *r, const char *at, const char *fmt, ...) FL_PRINTF(3, 4);
 static femlod_status fail_byte(ply_reader *r, const char *at, const char *fmt, ...) {
     char msg[FEMLOD_ERROR_MESSAGE_SIZE];
     va_list ap;
@@ -143,8 +141,7 @@ static int grow(void **p, size_t *cap, size_t n, size_t elem) {
 
 static femlod_status add_property(ply_reader *r, const char **tok, const size_t *len, size_t n) {
     char q[48];
-    if (r->nelems == 0)
-        return fail_line(r, r->line, FEMLOD_EPARSE, "property before any element");
+    if (r->nelems == 0) return fail_line(r, r->line, FEMLOD_EPARSE, "property before any element");
     ply_prop prop = {T_NONE, T_NONE, R_SKIP, NULL, 0};
     size_t name_tok;
     if (n >= 2 && word_is(tok[1], len[1], "list")) {
@@ -206,7 +203,8 @@ static femlod_status read_header(ply_reader *r) {
         p = next;
         if (r->line == 1) {
             if (n != 1 || !word_is(tok[0], len[0], "ply"))
-                return fail_line(r, 1, FEMLOD_EPARSE, "not a PLY file (the first line must be 'ply')");
+                return fail_line(r, 1, FEMLOD_EPARSE,
+                                 "not a PLY file (the first line must be 'ply')");
             continue;
         }
         if (n == 0) continue;
@@ -238,7 +236,8 @@ static femlod_status read_header(ply_reader *r) {
             have_format = 1;
         } else if (word_is(tok[0], len[0], "element")) {
             uint64_t count;
-            if (n != 3) return fail_line(r, r->line, FEMLOD_EPARSE, "expected 'element NAME COUNT'");
+            if (n != 3)
+                return fail_line(r, r->line, FEMLOD_EPARSE, "expected 'element NAME COUNT'");
             if (!parse_u64(tok[2], len[2], &count))
                 return fail_line(r, r->line, FEMLOD_EPARSE, "bad element count '%s'",
                                  fl_io_quote(q, sizeof q, tok[2], len[2]));
@@ -321,7 +320,7 @@ static femlod_status assign_roles(ply_reader *r) {
 
 /* {====== data, shared */
 
-/* Starts a face; adds the triangles of the fan as indices arrive. */
+/* A face being read: corners arrive one by one and become a fan from the first. */
 typedef struct fan {
     uint32_t first, prev;
     uint64_t count;
@@ -520,12 +519,12 @@ static femlod_status read_binary(ply_reader *r) {
         const ply_elem *e = &r->elems[ei];
         const ply_prop *props = r->props + e->first_prop;
         if (e->nprops == 0) continue; /* items without data: nothing to read */
-        size_t least = 0; /* bytes of one item: exact without lists */
+        size_t least = 0;             /* bytes of one item: exact without lists */
         int has_list = 0;
         for (size_t pi = 0; pi < e->nprops; pi++) {
             has_list |= props[pi].count_type != T_NONE;
-            least += type_size(props[pi].count_type != T_NONE ? props[pi].count_type
-                                                               : props[pi].type);
+            least +=
+                type_size(props[pi].count_type != T_NONE ? props[pi].count_type : props[pi].type);
         }
         uint64_t need;
         if (__builtin_mul_overflow(e->count, (uint64_t)least, &need) || need > size - pos)
@@ -546,8 +545,7 @@ static femlod_status read_binary(ply_reader *r) {
                         return fail_byte(r, r->data + pos,
                                          "file ends inside element '%s' (item %llu of %llu)",
                                          fl_io_quote(q, sizeof q, e->name, e->name_len),
-                                         (unsigned long long)it + 1,
-                                         (unsigned long long)e->count);
+                                         (unsigned long long)it + 1, (unsigned long long)e->count);
                     if (pr->role >= R_X && pr->role <= R_Z) {
                         double x = load_double(base + pos, pr->type, big);
                         if (!isfinite(x))
@@ -570,8 +568,8 @@ static femlod_status read_binary(ply_reader *r) {
                 if (count < 0)
                     return fail_byte(r, r->data + pos, "negative list count %lld", count);
                 if (pr->role == R_INDICES && count < 3)
-                    return fail_byte(r, r->data + pos,
-                                     "face has %lld vertices (at least 3 needed)", count);
+                    return fail_byte(r, r->data + pos, "face has %lld vertices (at least 3 needed)",
+                                     count);
                 uint64_t bytes;
                 if (__builtin_mul_overflow((uint64_t)count, (uint64_t)ts, &bytes) ||
                     bytes > size - pos - cs)
@@ -672,8 +670,7 @@ femlod_status fl_write_ply(const femlod_mesh *m, FILE *fp, int binary) {
                 "ply\nformat %s 1.0\ncomment femlod %s\nelement vertex %zu\n"
                 "property double x\nproperty double y\nproperty double z\n"
                 "element face %zu\nproperty list uchar uint vertex_indices\nend_header\n",
-                binary ? "binary_little_endian" : "ascii", FEMLOD_VERSION_STRING, m->nv,
-                m->nt) < 0)
+                binary ? "binary_little_endian" : "ascii", FEMLOD_VERSION_STRING, m->nv, m->nt) < 0)
         return FEMLOD_EIO;
     if (binary) {
         unsigned char rec[24];

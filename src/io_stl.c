@@ -16,10 +16,10 @@
 #define STL_PREFIX 84 /* header + uint32 triangle count */
 #define STL_RECORD 50 /* normal, 3 corners, uint16 attribute */
 
-static femlod_status fail_at(femlod_error *err, const char *name, size_t byte,
-                             const char *fmt, ...) FL_PRINTF(4, 5);
-static femlod_status fail_at(femlod_error *err, const char *name, size_t byte,
-                             const char *fmt, ...) {
+static femlod_status fail_at(femlod_error *err, const char *name, size_t byte, const char *fmt, ...)
+    FL_PRINTF(4, 5);
+static femlod_status fail_at(femlod_error *err, const char *name, size_t byte, const char *fmt,
+                             ...) {
     char msg[FEMLOD_ERROR_MESSAGE_SIZE];
     va_list ap;
     va_start(ap, fmt);
@@ -44,8 +44,9 @@ static float get_f32le(const unsigned char *p) {
 static femlod_status read_binary(femlod_mesh **out, const unsigned char *data, size_t size,
                                  const char *name, femlod_error *err) {
     if (size < STL_PREFIX)
-        return fail_at(err, name, size, "file ends inside the %d-byte binary STL header "
-                                        "(%zu bytes)", STL_PREFIX, size);
+        return fail_at(err, name, size,
+                       "file ends inside the %d-byte binary STL header (%zu bytes)", STL_PREFIX,
+                       size);
     size_t n = get_u32le(data + STL_HEADER);
     size_t need, body;
     if (__builtin_mul_overflow(n, (size_t)STL_RECORD, &body) ||
@@ -62,8 +63,8 @@ static femlod_status read_binary(femlod_mesh **out, const unsigned char *data, s
                        n, holds);
     }
     double *corners = fl_alloc(n, 9 * sizeof(double));
-    if (!corners) return fl_error(err, FEMLOD_ENOMEM, "%s: out of memory for %zu triangles",
-                                  name, n);
+    if (!corners)
+        return fl_error(err, FEMLOD_ENOMEM, "%s: out of memory for %zu triangles", name, n);
     for (size_t t = 0; t < n; t++) {
         const unsigned char *rec = data + STL_PREFIX + t * STL_RECORD + 12; /* skip the normal */
         for (int k = 0; k < 9; k++) {
@@ -140,7 +141,7 @@ static int keyword_is(const char *s, size_t n, const char *kw) {
     return 1;
 }
 
-/* Requires the keyword kw next; `inside` names what is open, for the message. */
+/* The keyword kw must come next (case-insensitive, as some exporters shout). */
 static femlod_status expect(stl_text *r, const char *kw) {
     size_t n;
     const char *s = token(r, &n);
@@ -151,10 +152,23 @@ static femlod_status expect(stl_text *r, const char *kw) {
     return FEMLOD_OK;
 }
 
-/* The rest of the line (a solid's name); tokens there are not keywords. */
-static void skip_line(stl_text *r) {
-    const char *nl = memchr(r->p, '\n', (size_t)(r->end - r->p));
-    r->p = nl ? nl : r->end;
+/* Skips a solid's name: the rest of the line, unless a keyword that may
+ * follow it (`stop`, or "facet") shows up there, as in files written on
+ * one line. */
+static void skip_name(stl_text *r, const char *stop) {
+    const char *p = r->p, *end = r->end;
+    for (;;) {
+        while (p < end && *p != '\n' && is_space(*p)) p++;
+        if (p == end || *p == '\n') break;
+        const char *s = p;
+        while (p < end && !is_space(*p)) p++;
+        size_t n = (size_t)(p - s);
+        if (keyword_is(s, n, stop) || keyword_is(s, n, "facet")) {
+            p = s;
+            break;
+        }
+    }
+    r->p = p;
 }
 
 static femlod_status read_number(stl_text *r, double *x, int finite) {
@@ -175,8 +189,8 @@ static femlod_status read_number(stl_text *r, double *x, int finite) {
     return FEMLOD_OK;
 }
 
-static femlod_status read_ascii(femlod_mesh **out, const char *data, size_t size,
-                                const char *name, femlod_error *err) {
+static femlod_status read_ascii(femlod_mesh **out, const char *data, size_t size, const char *name,
+                                femlod_error *err) {
     stl_text r = {data, data + size, data, name, 1, err, 0};
     fl_meshbuf soup; /* three "vertices" per triangle: the corners */
     memset(&soup, 0, sizeof soup);
@@ -191,7 +205,7 @@ static femlod_status read_ascii(femlod_mesh **out, const char *data, size_t size
             st = fail_line(&r, "expected 'solid', found '%s'", fl_io_quote(q, sizeof q, s, n));
             break;
         }
-        skip_line(&r);
+        skip_name(&r, "endsolid");
         for (;;) {
             s = token(&r, &n);
             if (!s) {
@@ -199,7 +213,7 @@ static femlod_status read_ascii(femlod_mesh **out, const char *data, size_t size
                 break;
             }
             if (keyword_is(s, n, "endsolid")) {
-                skip_line(&r);
+                skip_name(&r, "solid");
                 break;
             }
             if (!keyword_is(s, n, "facet")) {
@@ -220,8 +234,8 @@ static femlod_status read_ascii(femlod_mesh **out, const char *data, size_t size
                 for (int k = 0; k < 3 && st == FEMLOD_OK; k++) st = read_number(&r, &c[k], 1);
                 if (st != FEMLOD_OK) break;
                 if (soup.nv / 3 >= UINT32_MAX) {
-                    st = fl_error(err, FEMLOD_ELIMIT, "%s:%zu: too many triangles (limit %u)",
-                                  name, r.line, (unsigned)UINT32_MAX);
+                    st = fl_error(err, FEMLOD_ELIMIT, "%s:%zu: too many triangles (limit %u)", name,
+                                  r.line, (unsigned)UINT32_MAX);
                     break;
                 }
                 if (!fl_meshbuf_add_vertex(&soup, c[0], c[1], c[2])) {
@@ -260,8 +274,11 @@ static int looks_like_text(const unsigned char *p, size_t n) {
     }
     for (i = 0; i < n;) {
         unsigned char c = p[i];
-        size_t len = c < 0x80 ? 1 : (c & 0xE0) == 0xC0 ? 2 : (c & 0xF0) == 0xE0 ? 3
-                                 : (c & 0xF8) == 0xF0 ? 4 : 0;
+        size_t len = c < 0x80             ? 1
+                     : (c & 0xE0) == 0xC0 ? 2
+                     : (c & 0xF0) == 0xE0 ? 3
+                     : (c & 0xF8) == 0xF0 ? 4
+                                          : 0;
         if (len == 0 || len > n - i) return 0;
         for (size_t k = 1; k < len; k++)
             if ((p[i + k] & 0xC0) != 0x80) return 0;
@@ -284,8 +301,8 @@ femlod_status fl_read_stl(femlod_mesh **out, const char *data, size_t size, cons
         if (!looks_like_text(u, size)) {
             if (size >= STL_PREFIX) return read_binary(out, u, size, name, err);
             return fail_at(err, name, 0,
-                           "not an STL file (%zu bytes: too short for binary STL, "
-                           "and not text)", size);
+                           "not an STL file (%zu bytes: too short for binary STL, and not text)",
+                           size);
         }
     }
     /* Sizes are taken after the BOM is gone (assimp#6877). */

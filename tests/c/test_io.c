@@ -142,8 +142,8 @@ static int read_file(const char *path, char **data, size_t *size) {
 
 static void test_format_names(void) {
     static const femlod_format all[] = {
-        FEMLOD_FORMAT_OBJ, FEMLOD_FORMAT_STL,       FEMLOD_FORMAT_STL_ASCII, FEMLOD_FORMAT_STL_BINARY,
-        FEMLOD_FORMAT_OFF, FEMLOD_FORMAT_PLY,       FEMLOD_FORMAT_PLY_ASCII, FEMLOD_FORMAT_PLY_BINARY};
+        FEMLOD_FORMAT_OBJ, FEMLOD_FORMAT_STL, FEMLOD_FORMAT_STL_ASCII, FEMLOD_FORMAT_STL_BINARY,
+        FEMLOD_FORMAT_OFF, FEMLOD_FORMAT_PLY, FEMLOD_FORMAT_PLY_ASCII, FEMLOD_FORMAT_PLY_BINARY};
     for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
         CHECK(femlod_format_from_name(femlod_format_name(all[i])) == all[i]);
     CHECK(strcmp(femlod_format_name(FEMLOD_FORMAT_STL_ASCII), "stl_ascii") == 0);
@@ -163,7 +163,8 @@ static void test_format_names(void) {
     femlod_mesh *m = NULL;
     CHECK(femlod_mesh_read(&m, "nowhere/mesh.xyz", NULL, &err) == FEMLOD_EINPUT);
     CHECK(m == NULL);
-    CHECK_STR_HAS(err.message, "mesh.xyz: unknown file extension; supported: .obj, .stl, .off, .ply");
+    CHECK_STR_HAS(err.message,
+                  "mesh.xyz: unknown file extension; supported: .obj, .stl, .off, .ply");
     CHECK(femlod_mesh_read_memory(&m, "v 0 0 0", 7, NULL, NULL, &err) == FEMLOD_EINPUT);
     CHECK_STR_HAS(err.message, "(memory): unknown file extension");
     /* A name with a known extension is enough for memory reads. */
@@ -186,8 +187,9 @@ static void strtod_agrees(const char *s) {
     double a = fl_strtod(s, &e1), b = strtod(s, &e2);
     int same = memcmp(&a, &b, sizeof a) == 0 && e1 == e2;
     CHECK(same);
-    if (!same) fprintf(stderr, "  fl_strtod(\"%s\") = %.17g (end %td), strtod %.17g (end %td)\n",
-                       s, a, e1 - s, b, e2 - s);
+    if (!same)
+        fprintf(stderr, "  fl_strtod(\"%s\") = %.17g (end %td), strtod %.17g (end %td)\n", s, a,
+                e1 - s, b, e2 - s);
 }
 
 /* Significant digits of a printed number: sign, exponent, point, leading and
@@ -216,21 +218,62 @@ static void format_is(double x, const char *want) {
     char buf[40];
     int n = fl_format_double(buf, sizeof buf, x);
     CHECK(n == (int)strlen(want) && strcmp(buf, want) == 0);
-    if (strcmp(buf, want) != 0) fprintf(stderr, "  fl_format_double(%.17g) = \"%s\", want \"%s\"\n",
-                                        x, buf, want);
+    if (strcmp(buf, want) != 0)
+        fprintf(stderr, "  fl_format_double(%.17g) = \"%s\", want \"%s\"\n", x, buf, want);
 }
 
 static void test_numbers(void) {
     /* Fast path, slow path, and every way the end can fall. */
-    static const char *const cases[] = {
-        "0", "-0", "+1", "1.5", "0.1", ".5", "5.", "1e5", "1E+5", "1e-5", "1e", "1e+", "1.e3",
-        ".e3", ".", "-", "", "  1", "1.5abc", "0x1p3", "00012.50", "123456789012345678901234",
-        "9007199254740993", "9007199254740992.5", "1e23", "8.98846567431158e307",
-        "1.7976931348623157e308", "1.7976931348623159e308", "1e309", "1e-400", "4.9e-324",
-        "2.2250738585072011e-308", "2.2250738585072014e-308", "0.30000000000000004",
-        "1e22", "1e30", "123456e30", "0.000000000000000000000000000001", "1e0000000000000000005",
-        "3.14159265358979323846264338327950288", "1e-22", "7e-23", "inf", "-Infinity", "nan",
-        "NaN(123)", "nan(", "infin", "1,5", "2.5e+999999999999"};
+    static const char *const cases[] = {"0",
+                                        "-0",
+                                        "+1",
+                                        "1.5",
+                                        "0.1",
+                                        ".5",
+                                        "5.",
+                                        "1e5",
+                                        "1E+5",
+                                        "1e-5",
+                                        "1e",
+                                        "1e+",
+                                        "1.e3",
+                                        ".e3",
+                                        ".",
+                                        "-",
+                                        "",
+                                        "  1",
+                                        "1.5abc",
+                                        "0x1p3",
+                                        "00012.50",
+                                        "123456789012345678901234",
+                                        "9007199254740993",
+                                        "9007199254740992.5",
+                                        "1e23",
+                                        "8.98846567431158e307",
+                                        "1.7976931348623157e308",
+                                        "1.7976931348623159e308",
+                                        "1e309",
+                                        "1e-400",
+                                        "4.9e-324",
+                                        "2.2250738585072011e-308",
+                                        "2.2250738585072014e-308",
+                                        "0.30000000000000004",
+                                        "1e22",
+                                        "1e30",
+                                        "123456e30",
+                                        "0.000000000000000000000000000001",
+                                        "1e0000000000000000005",
+                                        "3.14159265358979323846264338327950288",
+                                        "1e-22",
+                                        "7e-23",
+                                        "inf",
+                                        "-Infinity",
+                                        "nan",
+                                        "NaN(123)",
+                                        "nan(",
+                                        "infin",
+                                        "1,5",
+                                        "2.5e+999999999999"};
     for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
         const char *s = cases[i];
         char *e1, *e2;
@@ -256,8 +299,8 @@ static void test_numbers(void) {
             if (k == dot) buf[n++] = '.';
             buf[n++] = (char)('0' + rng() % 10);
         }
-        if ((r >> 17) & 1) n += snprintf(buf + n, sizeof buf - (size_t)n, "e%d",
-                                         (int)((r >> 20) % 700) - 350);
+        if ((r >> 17) & 1)
+            n += snprintf(buf + n, sizeof buf - (size_t)n, "e%d", (int)((r >> 20) % 700) - 350);
         buf[n] = '\0';
         strtod_agrees(buf);
     }
@@ -284,11 +327,10 @@ static void test_numbers(void) {
         /* Spelled as printf's %.{shortest}g, or as a plain integer below 1e15. */
         char ref[40];
         snprintf(ref, sizeof ref, "%.*g", want, x);
-        CHECK(strcmp(out, ref) == 0 ||
-              (fabs(x) < 1e15 && x == floor(x) && !strpbrk(out, ".e")));
+        CHECK(strcmp(out, ref) == 0 || (fabs(x) < 1e15 && x == floor(x) && !strpbrk(out, ".e")));
         if (!ok || sd != want)
-            fprintf(stderr, "  fl_format_double(%.17g) = \"%s\" (%d digits, shortest %d)\n", x,
-                    out, sd, want);
+            fprintf(stderr, "  fl_format_double(%.17g) = \"%s\" (%d digits, shortest %d)\n", x, out,
+                    sd, want);
         /* Small values, the kind meshes hold. */
         double y = (double)(int64_t)(rng() % 2000001 - 1000000) / 1000.0;
         n = fl_format_double(out, sizeof out, y);
@@ -361,8 +403,8 @@ static void test_reference_files(void) {
     reference("bunny.obj", 75408, 37706);
 
     char p[512];
-    femlod_mesh *m = read_ok(path_in(p, sizeof p, FEMLOD_SHARED_DATA, "spider_binary.stl"),
-                             FEMLOD_FORMAT_AUTO);
+    femlod_mesh *m =
+        read_ok(path_in(p, sizeof p, FEMLOD_SHARED_DATA, "spider_binary.stl"), FEMLOD_FORMAT_AUTO);
     double lo[3], hi[3];
     if (m) {
         femlod_mesh_bbox(m, lo, hi);
@@ -389,7 +431,8 @@ static void test_reference_files(void) {
 
 static void test_obj(void) {
     char p[512];
-    femlod_mesh *m = read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "quads.obj"), FEMLOD_FORMAT_AUTO);
+    femlod_mesh *m =
+        read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "quads.obj"), FEMLOD_FORMAT_AUTO);
     CHECK(m && m->nv == 5 && m->nt == 4);
     CHECK(pos_is(m, 2, 1, 1, 0) && pos_is(m, 4, 0.5, 0.5, 1));
     CHECK(tri_is(m, 0, 0, 1, 2) && tri_is(m, 1, 0, 2, 3)); /* the quad's fan */
@@ -418,7 +461,8 @@ static void test_obj(void) {
     femlod_mesh_free(m);
     /* Inline comments, "fo", colours after the position, a vertex with w,
      * tabs and vertical tabs, a final line without newline, a lone \ at the end. */
-    m = mem_ok("v 1 2 3 # a comment\nv\t4\v5\f6 0.5 0.5 0.5\nv 7 8 9 1\nfo 1 2 3 \\", FEMLOD_FORMAT_OBJ);
+    m = mem_ok("v 1 2 3 # a comment\nv\t4\v5\f6 0.5 0.5 0.5\nv 7 8 9 1\nfo 1 2 3 \\",
+               FEMLOD_FORMAT_OBJ);
     CHECK(m && m->nv == 3 && m->nt == 1 && pos_is(m, 1, 4, 5, 6) && pos_is(m, 2, 7, 8, 9));
     femlod_mesh_free(m);
     /* Vertices only, and only comments: valid meshes without triangles. */
@@ -447,7 +491,8 @@ static void test_obj(void) {
     mem_bad("v 0 0 0\nv 1 0 0\nv 0 1 0\nf\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE,
             "mem:4: face has 0 vertices (at least 3 needed)");
     /* Errors on continued lines name the line they are on; short faces name their first line. */
-    mem_bad("v 0 0 \\\n 0\nv 1 \\\n 0 q\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE, "mem:4: bad number 'q'");
+    mem_bad("v 0 0 \\\n 0\nv 1 \\\n 0 q\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE,
+            "mem:4: bad number 'q'");
     mem_bad("v 0 0 0\nv 1 0 0\nf 1 \\\n 2\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE,
             "mem:3: face has 2 vertices");
     mem_bad("   \n\t\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE, "mem: empty file");
@@ -456,13 +501,13 @@ static void test_obj(void) {
 static void test_stl(void) {
     char p[512];
     /* Binary with a "solid" header: the size decides. */
-    femlod_mesh *bin = read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "solid_header.stl"),
-                               FEMLOD_FORMAT_AUTO);
+    femlod_mesh *bin =
+        read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "solid_header.stl"), FEMLOD_FORMAT_AUTO);
     CHECK(bin && bin->nv == 4 && bin->nt == 4);
     CHECK(pos_is(bin, 0, 0, 0, 0) && pos_is(bin, 1, 0, 1, 0) && pos_is(bin, 2, 1, 0, 0));
     CHECK(tri_is(bin, 0, 0, 1, 2) && tri_is(bin, 3, 2, 1, 3));
-    femlod_mesh *asc = read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "tetra_ascii.stl"),
-                               FEMLOD_FORMAT_AUTO);
+    femlod_mesh *asc =
+        read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "tetra_ascii.stl"), FEMLOD_FORMAT_AUTO);
     CHECK(same_mesh(bin, asc));
     /* BOM, CRLF, upper-case keywords, nan normals, two solids in one file. */
     femlod_mesh *two = read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "tetra_bom_two_solids.stl"),
@@ -477,11 +522,13 @@ static void test_stl(void) {
     femlod_error err = {0, ""};
     femlod_mesh *m = NULL;
     CHECK(femlod_mesh_read(&m, path_in(p, sizeof p, FEMLOD_TEST_DATA, "tetra_ascii.stl"), &o,
-                           &err) == FEMLOD_EPARSE && m == NULL);
+                           &err) == FEMLOD_EPARSE &&
+          m == NULL);
     CHECK_STR_HAS(err.message, "tetra_ascii.stl: byte 80: declared ");
     o.format = FEMLOD_FORMAT_STL_ASCII;
     CHECK(femlod_mesh_read(&m, path_in(p, sizeof p, FEMLOD_TEST_DATA, "solid_header.stl"), &o,
-                           &err) == FEMLOD_EPARSE && m == NULL);
+                           &err) == FEMLOD_EPARSE &&
+          m == NULL);
     CHECK_STR_HAS(err.message, "solid_header.stl:");
 
     /* Welding: equal positions merge, -0.0 == 0.0; degenerate and duplicate
@@ -495,6 +542,12 @@ static void test_stl(void) {
     CHECK(m && m->nv == 4 && m->nt == 4);
     CHECK(tri_is(m, 1, 1, 3, 2) && tri_is(m, 2, 1, 1, 3) && tri_is(m, 3, 0, 1, 2));
     femlod_mesh_free(m);
+    /* A whole file on one line, and a solid named like a keyword's neighbour. */
+    m = mem_ok("solid one facet normal 0 0 1 outer loop vertex 0 0 0 vertex 1 0 0 vertex 0 1 0 "
+               "endloop endfacet endsolid one solid two words\nendsolid",
+               FEMLOD_FORMAT_STL);
+    CHECK(m && m->nv == 3 && m->nt == 1 && tri_is(m, 0, 0, 1, 2));
+    femlod_mesh_free(m);
     /* An empty solid and an empty binary file are empty meshes. */
     m = mem_ok("solid empty\nendsolid empty\n", FEMLOD_FORMAT_STL);
     CHECK(m && m->nv == 0 && m->nt == 0);
@@ -503,7 +556,8 @@ static void test_stl(void) {
     memset(empty_bin, 0, sizeof empty_bin);
     m = NULL;
     CHECK(femlod_mesh_read_memory(&m, empty_bin, sizeof empty_bin, "e.stl", NULL, &err) ==
-              FEMLOD_OK && m && m->nt == 0);
+              FEMLOD_OK &&
+          m && m->nt == 0);
     femlod_mesh_free(m);
     /* A text file that lacks "solid" is parsed as text, whatever its size. */
     mem_bad("facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
@@ -513,18 +567,20 @@ static void test_stl(void) {
             "endloop\n",
             FEMLOD_FORMAT_STL, FEMLOD_EPARSE, "mem:7: bad number 'endloop'");
     mem_bad("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n",
-            FEMLOD_FORMAT_STL, FEMLOD_EPARSE, "mem:5: expected 'vertex', found the end of the file");
+            FEMLOD_FORMAT_STL, FEMLOD_EPARSE,
+            "mem:5: expected 'vertex', found the end of the file");
 }
 
 static void test_off(void) {
     char p[512];
-    femlod_mesh *m = read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "tetra.off"), FEMLOD_FORMAT_AUTO);
+    femlod_mesh *m =
+        read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "tetra.off"), FEMLOD_FORMAT_AUTO);
     CHECK(m && m->nv == 4 && m->nt == 4 && pos_is(m, 3, 0, 0, 1));
     CHECK(tri_is(m, 0, 0, 2, 1) && tri_is(m, 3, 1, 2, 3));
     femlod_mesh_free(m);
     m = read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "square_colors.off"), FEMLOD_FORMAT_OFF);
     CHECK(m && m->nv == 6 && m->nt == 5 && pos_is(m, 5, 2, 1.5, 0));
-    CHECK(tri_is(m, 0, 0, 1, 2) && tri_is(m, 1, 0, 2, 3));                        /* quad */
+    CHECK(tri_is(m, 0, 0, 1, 2) && tri_is(m, 1, 0, 2, 3));                          /* quad */
     CHECK(tri_is(m, 2, 1, 4, 5) && tri_is(m, 3, 1, 5, 2) && tri_is(m, 4, 1, 2, 2)); /* pentagon */
     femlod_mesh_free(m);
     m = mem_ok("NOFF\n3 1 0\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\n3 0 1 2\n", FEMLOD_FORMAT_OFF);
@@ -533,8 +589,8 @@ static void test_off(void) {
     m = mem_ok("OFF\n0 0 0\n", FEMLOD_FORMAT_OFF);
     CHECK(m && m->nv == 0 && m->nt == 0);
     femlod_mesh_free(m);
-    mem_bad("OFF\n3 1 0\n0.0 0.0 0.0\n1.0 0.0 0.0\n0.0 1.0 0.0\n3 0 1\n", FEMLOD_FORMAT_OFF, FEMLOD_EPARSE,
-            "mem:6: file ends inside face 1 (2 of 3 indices)");
+    mem_bad("OFF\n3 1 0\n0.0 0.0 0.0\n1.0 0.0 0.0\n0.0 1.0 0.0\n3 0 1\n", FEMLOD_FORMAT_OFF,
+            FEMLOD_EPARSE, "mem:6: file ends inside face 1 (2 of 3 indices)");
     mem_bad("4OFF\n", FEMLOD_FORMAT_OFF, FEMLOD_EUNSUPPORTED, "mem:1: '4OFF': only 3-dimensional");
     mem_bad("OFF\n3 x 0\n", FEMLOD_FORMAT_OFF, FEMLOD_EPARSE, "mem:2: bad face count 'x'");
     mem_bad("OFF\n3 1\n", FEMLOD_FORMAT_OFF, FEMLOD_EPARSE,
@@ -543,19 +599,19 @@ static void test_off(void) {
 
 static void test_ply(void) {
     char p[512];
-    femlod_mesh *m = read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "ascii_extra.ply"),
-                             FEMLOD_FORMAT_AUTO);
+    femlod_mesh *m =
+        read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "ascii_extra.ply"), FEMLOD_FORMAT_AUTO);
     CHECK(m && m->nv == 4 && m->nt == 3);
     CHECK(pos_is(m, 0, 0, 0, 0) && pos_is(m, 1, 1, 0, 0) && pos_is(m, 2, 1, 1, 0) &&
           pos_is(m, 3, 0.5, 1.5, 7));
     CHECK(tri_is(m, 0, 0, 1, 2) && tri_is(m, 1, 0, 2, 3) && tri_is(m, 2, 2, 3, 0));
     femlod_mesh_free(m);
-    femlod_mesh *le = read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "binary_le.ply"),
-                              FEMLOD_FORMAT_PLY);
+    femlod_mesh *le =
+        read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "binary_le.ply"), FEMLOD_FORMAT_PLY);
     femlod_mesh *be = read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "binary_be.ply"),
                               FEMLOD_FORMAT_PLY_ASCII); /* the file's own encoding wins */
-    femlod_mesh *off = read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "tetra.off"),
-                               FEMLOD_FORMAT_OFF);
+    femlod_mesh *off =
+        read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "tetra.off"), FEMLOD_FORMAT_OFF);
     CHECK(same_mesh(le, off) && same_mesh(be, off));
     femlod_mesh_free(le);
     femlod_mesh_free(be);
@@ -568,16 +624,18 @@ static void test_ply(void) {
     femlod_mesh_free(m);
     mem_bad("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
             "property float z\nend_header\n0.0 0.0\n",
-            FEMLOD_FORMAT_PLY, FEMLOD_EPARSE, "mem:8: file ends inside element 'vertex' (item 1 of 1)");
+            FEMLOD_FORMAT_PLY, FEMLOD_EPARSE,
+            "mem:8: file ends inside element 'vertex' (item 1 of 1)");
     mem_bad("ply\nformat ascii 2.0\n", FEMLOD_FORMAT_PLY, FEMLOD_EUNSUPPORTED,
             "mem:2: unsupported PLY version '2.0'");
     mem_bad("ply\nformat ascii 1.0\nproperty float x\n", FEMLOD_FORMAT_PLY, FEMLOD_EPARSE,
             "mem:3: property before any element");
     mem_bad("ply\nformat ascii 1.0\nelement vertex 1\nproperty float128 x\n", FEMLOD_FORMAT_PLY,
             FEMLOD_EPARSE, "mem:4: unknown type 'float128'");
-    mem_bad("ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
-            "property float z\nelement face 0\nproperty list float int vertex_indices\nend_header\n",
-            FEMLOD_FORMAT_PLY, FEMLOD_EUNSUPPORTED, "mem:8: list count type 'float'");
+    mem_bad(
+        "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+        "property float z\nelement face 0\nproperty list float int vertex_indices\nend_header\n",
+        FEMLOD_FORMAT_PLY, FEMLOD_EUNSUPPORTED, "mem:8: list count type 'float'");
     mem_bad("ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\n"
             "end_header\n",
             FEMLOD_FORMAT_PLY, FEMLOD_EPARSE, "mem:5: no element 'vertex' in the header");
@@ -610,7 +668,8 @@ static const bad_case bad_cases[] = {
     /* OBJ */
     {"index0.obj", FEMLOD_EPARSE, ":4: face index 0 is invalid (OBJ indices start at 1)"},
     {"index_range.obj", FEMLOD_EPARSE, ":6: face index 9 out of range (4 vertices)"},
-    {"relative_before_first.obj", FEMLOD_EPARSE, ":4: face index -5 out of range (3 vertices so far)"},
+    {"relative_before_first.obj", FEMLOD_EPARSE,
+     ":4: face index -5 out of range (3 vertices so far)"},
     {"forward_range.obj", FEMLOD_EPARSE, ":2: face index 5 out of range (4 vertices)"},
     {"face_two_vertices.obj", FEMLOD_EPARSE, ":5: face has 2 vertices (at least 3 needed)"},
     {"coord_nan.obj", FEMLOD_EPARSE, ":2: coordinate 'nan' is not finite"},
@@ -624,9 +683,11 @@ static const bad_case bad_cases[] = {
     {"empty.obj", FEMLOD_EPARSE, ": empty file"},
     {"binary_garbage.obj", FEMLOD_EPARSE, ":1: unknown statement '"},
     /* STL */
-    {"truncated.stl", FEMLOD_EPARSE, ": byte 80: declared 4 triangles, file holds 3 (and 10 extra bytes"},
+    {"truncated.stl", FEMLOD_EPARSE,
+     ": byte 80: declared 4 triangles, file holds 3 (and 10 extra bytes"},
     {"count_overflow.stl", FEMLOD_EPARSE, ": byte 80: declared 4294967295 triangles, file holds 0"},
-    {"count_overflow_data.stl", FEMLOD_EPARSE, ": byte 80: declared 4294967295 triangles, file holds 4"},
+    {"count_overflow_data.stl", FEMLOD_EPARSE,
+     ": byte 80: declared 4294967295 triangles, file holds 4"},
     {"garbage.stl", FEMLOD_EPARSE, ": byte 80: declared 2164095735 triangles, file holds 18"},
     {"garbage_short.stl", FEMLOD_EPARSE, ": byte 0: not an STL file (60 bytes"},
     {"binary_nan.stl", FEMLOD_EPARSE, ": byte 212: triangle 3: coordinate is not finite (nan)"},
@@ -668,6 +729,8 @@ static const bad_case bad_cases[] = {
     {"index_range.ply", FEMLOD_EPARSE, ": byte 265: face index 4 out of range (4 vertices)"},
     {"negative_index.ply", FEMLOD_EPARSE, ":14: face index -1 out of range (4 vertices)"},
     {"face_two.ply", FEMLOD_EPARSE, ":14: face has 2 vertices (at least 3 needed)"},
+    {"face_two_binary.ply", FEMLOD_EPARSE, ": byte 217: face has 2 vertices (at least 3 needed)"},
+    {"negative_count.ply", FEMLOD_EPARSE, ": byte 216: negative list count -3"},
     {"coord_inf.ply", FEMLOD_EPARSE, ": byte 197: vertex 3: coordinate is not finite (inf)"},
     {"garbage_ascii.ply", FEMLOD_EPARSE, ":12: bad number 'x'"},
     {"no_end_header.ply", FEMLOD_EPARSE, ":4: file ends inside the header (no 'end_header')"},
@@ -732,8 +795,9 @@ static void test_bad_files(void) {
 static femlod_mesh *awkward_mesh(void) {
     femlod_mesh *m = shape_icosphere(2);
     if (!m) return NULL;
-    static const double special[] = {0.1, -0.0, 1e-300, 5e-324, 1e300, 123456789.123456789,
-                                     1.0 / 3.0, -2.5e-7, DBL_MAX, -DBL_MIN, 1e16, 0.0};
+    static const double special[] = {
+        0.1,       -0.0,    1e-300,  5e-324,   1e300, 123456789.123456789,
+        1.0 / 3.0, -2.5e-7, DBL_MAX, -DBL_MIN, 1e16,  0.0};
     size_t ns = sizeof special / sizeof special[0];
     for (size_t i = 0; i < 3 * m->nv; i++) {
         if (i < ns) {
@@ -781,13 +845,14 @@ static void test_round_trips(void) {
         size_t size;
         if (read_file(p, &data, &size)) {
             CHECK(size == 84 + 50 * a->nt);
-            CHECK(memcmp(data, "femlod " FEMLOD_VERSION_STRING, 7 + strlen(FEMLOD_VERSION_STRING)) ==
-                  0);
+            CHECK(memcmp(data, "femlod " FEMLOD_VERSION_STRING,
+                         7 + strlen(FEMLOD_VERSION_STRING)) == 0);
             /* The facet normal of triangle 0 is a unit vector. */
             float nrm[3];
             memcpy(nrm, data + 84, sizeof nrm);
-            CHECK_NEAR(sqrt((double)nrm[0] * nrm[0] + (double)nrm[1] * nrm[1] +
-                            (double)nrm[2] * nrm[2]), 1.0, 1e-6);
+            CHECK_NEAR(
+                sqrt((double)nrm[0] * nrm[0] + (double)nrm[1] * nrm[1] + (double)nrm[2] * nrm[2]),
+                1.0, 1e-6);
             free(data);
         }
     }
@@ -849,8 +914,8 @@ static void test_round_trips(void) {
 /* {====== locale independence */
 
 static int comma_locale(void) {
-    static const char *const names[] = {"de_DE.UTF-8", "de_DE.utf8", "fr_FR.UTF-8", "fr_FR.utf8",
-                                        "de_DE", "nl_NL.UTF-8", "ru_RU.UTF-8"};
+    static const char *const names[] = {"de_DE.UTF-8", "de_DE.utf8",  "fr_FR.UTF-8", "fr_FR.utf8",
+                                        "de_DE",       "nl_NL.UTF-8", "ru_RU.UTF-8"};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         if (setlocale(LC_NUMERIC, names[i]) && strcmp(localeconv()->decimal_point, ",") == 0)
             return 1;
@@ -859,12 +924,10 @@ static int comma_locale(void) {
     char cmd[1200], dir[600];
     snprintf(dir, sizeof dir, "%s/locale", scratch);
     mkdir(dir, 0755);
-    snprintf(cmd, sizeof cmd,
-             "localedef -i de_DE -f UTF-8 '%s/de_DE.UTF-8' >/dev/null 2>&1", dir);
+    snprintf(cmd, sizeof cmd, "localedef -i de_DE -f UTF-8 '%s/de_DE.UTF-8' >/dev/null 2>&1", dir);
     if (system(cmd) == 0) {
         setenv("LOCPATH", dir, 1);
-        if (setlocale(LC_NUMERIC, "de_DE.UTF-8") &&
-            strcmp(localeconv()->decimal_point, ",") == 0)
+        if (setlocale(LC_NUMERIC, "de_DE.UTF-8") && strcmp(localeconv()->decimal_point, ",") == 0)
             return 1;
     }
     setlocale(LC_NUMERIC, "C");
@@ -1006,7 +1069,8 @@ static void test_atomic_writes(void) {
     /* Unknown extension, and the format option overriding it. */
     path_in(p, sizeof p, dir, "out.xyz");
     CHECK(femlod_mesh_write(small, p, NULL, &err) == FEMLOD_EINPUT);
-    CHECK_STR_HAS(err.message, "out.xyz: unknown file extension; supported: .obj, .stl, .off, .ply");
+    CHECK_STR_HAS(err.message,
+                  "out.xyz: unknown file extension; supported: .obj, .stl, .off, .ply");
     CHECK(access(p, F_OK) != 0);
     femlod_write_options wo = {FEMLOD_FORMAT_PLY_ASCII};
     CHECK(femlod_mesh_write(small, p, &wo, &err) == FEMLOD_OK);
@@ -1062,7 +1126,8 @@ static void torture(const char *name, const char *data, size_t size) {
         memcpy(buf, data, size);
         int flips = 1 + (int)(rng() % 4);
         for (int k = 0; k < flips; k++) {
-            static const char junk[] = {'\0', '\n', ' ', '-', '/', '#', '9', '\\', 'e', '.', '\xff'};
+            static const char junk[] = {'\0', '\n', ' ', '-', '/',   '#',
+                                        '9',  '\\', 'e', '.', '\xff'};
             size_t at = (size_t)(rng() % size);
             buf[at] = (rng() & 1) ? junk[rng() % sizeof junk] : (char)rng();
         }
@@ -1081,16 +1146,17 @@ static void torture(const char *name, const char *data, size_t size) {
     free(buf);
     CHECK(bad == 0);
     CHECK(failed > 0); /* the damage was seen */
-    if (bad) fprintf(stderr, "  %s: %zu invalid results (%zu read, %zu refused)\n", name, bad, ok,
-                     failed);
+    if (bad)
+        fprintf(stderr, "  %s: %zu invalid results (%zu read, %zu refused)\n", name, bad, ok,
+                failed);
 }
 
 static void test_torture(void) {
-    static const char *const files[] = {"quads.obj",         "crlf_continuation.obj",
-                                        "tetra_ascii.stl",   "solid_header.stl",
-                                        "tetra_bom_two_solids.stl", "tetra.off",
-                                        "square_colors.off", "ascii_extra.ply",
-                                        "binary_le.ply",     "binary_be.ply"};
+    static const char *const files[] = {
+        "quads.obj",         "crlf_continuation.obj",    "tetra_ascii.stl",
+        "solid_header.stl",  "tetra_bom_two_solids.stl", "tetra.off",
+        "square_colors.off", "ascii_extra.ply",          "binary_le.ply",
+        "binary_be.ply"};
     char p[600];
     for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
         char *data;
