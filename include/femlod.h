@@ -445,15 +445,103 @@ void femlod_collapse_log_free(femlod_collapse_log *log);
 
 /* Simplifies mesh into *out (a new mesh; mesh is not changed) and, when
  * log is not NULL, records every collapse into *log. options NULL: all
- * defaults. result (may be NULL) is filled on success. Vertices of the
- * output are the surviving vertices in increasing order of their slot,
- * triangles in increasing order of their slot; unused input vertices and
- * triangles with a repeated index are not carried over.
+ * defaults. result (may be NULL) is filled on success. Output vertices
+ * come in increasing node id (see the collapse log: surviving input
+ * vertices in input order, then new vertices in collapse order); output
+ * triangles in the order of the input triangles they descend from. Unused
+ * input vertices and triangles with a repeated index are not carried over
+ * (result->dropped_degenerate counts the latter).
  * Fails with FEMLOD_EINPUT for inconsistent options, FEMLOD_ENOMEM.
  * Deterministic: the same input and options give identical arrays. */
 femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **log, const femlod_mesh *mesh,
                               const femlod_simplify_options *options, femlod_simplify_result *result,
                               femlod_error *err);
+
+/* }==================================================================== */
+
+/* {=== Vertex hierarchy and local LOD (paper sections 5.1, 5.2) */
+
+/*
+ * The binary vertex hierarchy of a simplification: leaves are the input
+ * vertices (node ids 0..V-1), collapse c made node V+c from its two
+ * children. The *front* is the set of nodes that form the current mesh; it
+ * starts at the simplification's result. Splits and collapses resolve their
+ * dependencies themselves, and every front is a valid mesh: every triangle
+ * of it appeared during the simplification (docs/design.md gives the rule
+ * and its proof). Lua numbers nodes from 1 (id + 1).
+ */
+typedef struct femlod_hierarchy femlod_hierarchy;
+
+/* Builds the hierarchy of a simplification from its input mesh and collapse
+ * log (femlod_simplify). Fails with FEMLOD_EINPUT when the log does not
+ * belong to the mesh. The front starts at the simplification's output. */
+femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh *input,
+                                      const femlod_collapse_log *log, femlod_error *err);
+void femlod_hierarchy_free(femlod_hierarchy *h);
+
+typedef enum femlod_node_state {
+    FEMLOD_NODE_ABOVE = 0, /* not yet formed: its descendants are on the front */
+    FEMLOD_NODE_FRONT = 1, /* a vertex of the current mesh */
+    FEMLOD_NODE_BELOW = 2  /* merged into a front node above it */
+} femlod_node_state;
+
+typedef struct femlod_node_info {
+    uint32_t id;
+    uint32_t parent;      /* UINT32_MAX for a root */
+    uint32_t child[2];    /* UINT32_MAX for a leaf */
+    double position[3];
+    double e_size;        /* length: mean distance to the vstars (leaf: mean incident input edge) */
+    uint32_t depth;       /* number of ancestors */
+    femlod_node_state state;
+} femlod_node_info;
+
+size_t femlod_hierarchy_node_count(const femlod_hierarchy *h);
+size_t femlod_hierarchy_input_vertices(const femlod_hierarchy *h);
+/* Nodes on the front (unused input vertices included) and triangles of the front mesh. */
+size_t femlod_hierarchy_front_nodes(const femlod_hierarchy *h);
+size_t femlod_hierarchy_front_triangles(const femlod_hierarchy *h);
+/* Returns 0 when id does not exist. */
+int femlod_hierarchy_node(const femlod_hierarchy *h, uint32_t id, femlod_node_info *out);
+/* View of the front nodes, valid until the next operation. */
+const uint32_t *femlod_hierarchy_front(const femlod_hierarchy *h, size_t *count);
+size_t femlod_hierarchy_bytes(const femlod_hierarchy *h);
+
+/* Splits front node `node` (an internal node), splitting first whatever
+ * depends on it; *ops (may be NULL) gets the number of splits done.
+ * FEMLOD_EINPUT when node is a leaf or not on the front. */
+femlod_status femlod_hierarchy_split(femlod_hierarchy *h, uint32_t node, size_t *ops,
+                                     femlod_error *err);
+/* Collapses the children of `node` (above the front) into it, collapsing
+ * first whatever it needs. FEMLOD_EINPUT when node is a leaf or already
+ * on or below the front. */
+femlod_status femlod_hierarchy_collapse(femlod_hierarchy *h, uint32_t node, size_t *ops,
+                                        femlod_error *err);
+
+/* Size threshold T_S of a node (length); a NaN return stops the operation
+ * with FEMLOD_ECANCELLED, leaving a valid front. */
+typedef double (*femlod_size_fn)(void *payload, const femlod_node_info *node);
+
+/* Local LOD (5.2): splits every front node whose e_size exceeds its
+ * threshold (fn(node), or `size` when fn is NULL), then its children, and
+ * so on; refine(0) gives back the input mesh. */
+femlod_status femlod_hierarchy_refine(femlod_hierarchy *h, double size, femlod_size_fn fn,
+                                      void *payload, size_t *ops, femlod_error *err);
+/* The inverse: collapses a pair whose two children are on the front while
+ * the parent's e_size is at most its threshold (fn(parent) or `size`);
+ * coarsen(INFINITY) gives back the simplification's result. */
+femlod_status femlod_hierarchy_coarsen(femlod_hierarchy *h, double size, femlod_size_fn fn,
+                                       void *payload, size_t *ops, femlod_error *err);
+
+/* The front as a mesh, in time linear in the front. Vertices are the front
+ * nodes used by a triangle, in order of first use; when nodes is not NULL,
+ * *nodes gets a malloc'd array (free with free()) of each vertex's node id. */
+femlod_status femlod_hierarchy_extract(femlod_hierarchy *h, femlod_mesh **out, uint32_t **nodes,
+                                       femlod_error *err);
+
+/* Checks the invariant from scratch, in time linear in the hierarchy: the
+ * front is a cut, the applied collapses are closed under vstars, and the
+ * front's triangles are exactly the faces whose corners are all on it. */
+femlod_status femlod_hierarchy_validate(const femlod_hierarchy *h, femlod_error *err);
 
 /* }==================================================================== */
 

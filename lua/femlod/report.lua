@@ -4,8 +4,10 @@
 --   print(report.text(mesh:quality(), "part.obj"))    -- multi-line report with histogram
 --   print(report.header()); print(report.row(q, "part.obj", "original"))  -- a Table 1 row
 --   print(report.fields(q))                            -- "key value" lines, sorted
+--   print(report.stats(h:stats()))                     -- how a simplification went
 --
--- Each function also takes a femlod.Mesh instead of its quality table.
+-- Each function also takes a femlod.Mesh instead of its quality table
+-- (report.stats a femlod.Hierarchy instead of its stats table).
 -- Pure Lua over the table's fields: nothing here touches mesh data.
 
 local type, error, pairs, ipairs, tostring, getmetatable = type, error, pairs, ipairs, tostring, getmetatable
@@ -142,5 +144,47 @@ function M.fields(q)
   end
   return concat(out, "\n")
 end
+
+-- {====== simplification statistics (h:stats())
+
+local REJECTED = { "tolerance", "deviation", "stretch", "size", "valence", "foldover", "topology",
+  "intersection" }
+local THRESHOLDS = { "target", "tolerance", "max_deviation", "min_stretch", "max_size", "max_valence",
+  "feature_angle", "feature_weight", "max_normal_change" }
+
+local function stats_of(s, fname)
+  local mt = type(s) == "userdata" and getmetatable(s)
+  local tname = type(mt) == "table" and mt.__name
+  if tname == "femlod.Hierarchy" then return s:stats() end
+  if type(s) ~= "table" or type(s.stop_reason) ~= "string" or type(s.rejected) ~= "table"
+      or type(s.thresholds) ~= "table" then
+    error(format("bad argument #1 to '%s' (stats table or femlod.Hierarchy expected, got %s)",
+      fname, type(s) == "table" and "table without stats fields" or tname or type(s)), 3)
+  end
+  return s
+end
+
+-- Four lines: why and after how much work it stopped, which checks refused
+-- collapses (counts of edge evaluations), the input triangles left breaking
+-- a threshold, and the thresholds in force ("off" when switched off).
+function M.stats(s)
+  s = stats_of(s, "stats")
+  local rej, th = {}, {}
+  for i, k in ipairs(REJECTED) do rej[i] = format("%s %d", k, s.rejected[k] or 0) end
+  for i, k in ipairs(THRESHOLDS) do
+    local v = s.thresholds[k]
+    th[i] = format("%s %s", k, v == false and "off" or type(v) == "number" and num(v) or "?")
+  end
+  return concat({
+    format("stop: %s; %s (%d in the pre-phase) in %.3f s", s.stop_reason,
+      plural(s.collapses, "collapse"), s.prephase_collapses, s.seconds),
+    "rejected: " .. concat(rej, ", "),
+    format("violating input: %s; dropped degenerate: %d", plural(s.violating_input, "triangle"),
+      s.dropped_degenerate),
+    "thresholds: " .. concat(th, ", "),
+  }, "\n")
+end
+
+-- }======
 
 return M

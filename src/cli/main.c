@@ -1,6 +1,6 @@
 /*
- * main.c - the femlod program: runs Lua recipes and the info and convert
- * commands (shaped like Lua's own lua.c: all work happens in pmain, under
+ * main.c - the femlod program: runs Lua recipes and the info, convert and
+ * simplify commands (shaped like Lua's own lua.c: all work happens in pmain, under
  * lua_pcall, and errors are reported once, in main).
  *
  * Grammar: femlod [options] COMMAND [ARGS] [name=value ...]; see usage().
@@ -23,7 +23,7 @@
 
 enum { EXIT_OK = 0, EXIT_ERROR = 1, EXIT_USAGE = 2, EXIT_LIMIT = 3 };
 
-typedef enum command { CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT } command;
+typedef enum command { CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY } command;
 
 /* What the command line asked for. Indices point into argv. */
 typedef struct cli {
@@ -49,6 +49,14 @@ static void usage_text(FILE *f) {
           "                   report=text|row|fields  format=FMT  reference=MESH\n"
           "  convert IN OUT   read IN and write OUT (format from the extension)\n"
           "                   format=FMT (of OUT)  input_format=FMT (of IN)\n"
+          "  simplify IN OUT  simplify IN into OUT; print the before/after report\n"
+          "                   --target N | --ratio R  (triangles, or output/input)\n"
+          "                   --tolerance X  --max-deviation X  --min-stretch X\n"
+          "                   --max-size X  --max-valence N  --feature-angle DEG\n"
+          "                   --feature-weight W  --max-normal-change DEG\n"
+          "                   (each of these also takes 'off')\n"
+          "                   --keep-boundary  --area-weighted  --lock I,J,K\n"
+          "                   or as pairs: target=3000 min_stretch=0.3 lock=4,9\n"
           "  help             print this help\n"
           "\n"
           "Options:\n"
@@ -155,6 +163,9 @@ static int parse_args(lua_State *L, cli *c) {
     } else if (strcmp(w, "convert") == 0) {
         c->cmd = CMD_CONVERT;
         need = 2;
+    } else if (strcmp(w, "simplify") == 0) {
+        c->cmd = CMD_SIMPLIFY;
+        need = 2;
     } else if (strcmp(w, "help") == 0) {
         usage_text(stdout);
         return EXIT_OK;
@@ -168,6 +179,7 @@ static int parse_args(lua_State *L, cli *c) {
     c->operand = i + 1;
     if (c->operand + need > c->argc) {
         static const char *const what[] = {"", "a recipe", "a line of Lua", "a mesh file",
+                                           "an input and an output file",
                                            "an input and an output file"};
         return usage_error("missing %s", what[c->cmd]);
     }
@@ -437,6 +449,240 @@ static int cmd_convert(lua_State *L, const cli *c) {
 
 /* }==================================================================== */
 
+/* {====================================================================
+ * simplify: flags (--min-stretch 0.3, --min-stretch=0.3) or name=value
+ * pairs (min_stretch=0.3) after IN and OUT. Every value is checked before
+ * IN is read, by the binding's own option reader, so a bad value is a usage
+ * error (exit 2) with the same rules as the Lua API.
+ * ===================================================================== */
+
+enum { OPT_NUMBER, OPT_THRESHOLD, OPT_SWITCH, OPT_LOCK };
+
+typedef struct simplify_opt {
+    const char *flag, *key;
+    int kind;
+} simplify_opt;
+
+static const simplify_opt simplify_opts[] = {
+    {"--target", "target", OPT_NUMBER},
+    {"--ratio", "ratio", OPT_NUMBER},
+    {"--tolerance", "tolerance", OPT_THRESHOLD},
+    {"--max-deviation", "max_deviation", OPT_THRESHOLD},
+    {"--min-stretch", "min_stretch", OPT_THRESHOLD},
+    {"--max-size", "max_size", OPT_THRESHOLD},
+    {"--max-valence", "max_valence", OPT_THRESHOLD},
+    {"--feature-angle", "feature_angle", OPT_THRESHOLD},
+    {"--feature-weight", "feature_weight", OPT_THRESHOLD},
+    {"--max-normal-change", "max_normal_change", OPT_THRESHOLD},
+    {"--keep-boundary", "keep_boundary", OPT_SWITCH},
+    {"--area-weighted", "area_weighted", OPT_SWITCH},
+    {"--lock", "lock", OPT_LOCK},
+};
+#define N_SIMPLIFY_OPTS (sizeof simplify_opts / sizeof simplify_opts[0])
+
+static const char SIMPLIFY_KEYS[] = "target, ratio, tolerance, max_deviation, min_stretch, "
+                                    "max_size, max_valence, feature_angle, feature_weight, "
+                                    "max_normal_change, keep_boundary, area_weighted, lock";
+
+/* Pushes the list "I,J,K" as a table of integers (range checked later,
+ * against the mesh). */
+static int push_lock_list(lua_State *L, const char *name, const char *s) {
+    lua_newtable(L);
+    lua_Integer n = 0;
+    const char *p = s;
+    for (;;) {
+        const char *comma = strchr(p, ',');
+        size_t len = comma ? (size_t)(comma - p) : strlen(p);
+        char word[32];
+        int isint = 0;
+        lua_Integer v = 0;
+        if (len > 0 && len < sizeof word) {
+            memcpy(word, p, len);
+            word[len] = '\0';
+            if (word[0] >= '0' && word[0] <= '9' && lua_stringtonumber(L, word)) {
+                v = lua_tointegerx(L, -1, &isint);
+                lua_pop(L, 1);
+            }
+        }
+        if (!isint || v < 1)
+            return usage_error("%s: list of vertex indices (1, 2, ...) expected, got '%s'", name, s);
+        lua_pushinteger(L, v);
+        lua_rawseti(L, -2, ++n);
+        if (!comma) break;
+        p = comma + 1;
+    }
+    return -1;
+}
+
+/* Puts one option into the table at opts; name is how the user spelled it
+ * (recorded in the table at spell, for messages), value NULL for a flag
+ * without one. */
+static int set_simplify_opt(lua_State *L, int opts, int spell, const simplify_opt *o,
+                            const char *name, const char *value) {
+    if (lua_getfield(L, opts, o->key) != LUA_TNIL) {
+        lua_pop(L, 1);
+        return usage_error("option given twice: '%s'", name);
+    }
+    lua_pop(L, 1);
+    lua_pushstring(L, name);
+    lua_setfield(L, spell, o->key);
+    switch (o->kind) {
+    case OPT_SWITCH:
+        if (!value || strcmp(value, "true") == 0)
+            lua_pushboolean(L, 1);
+        else if (strcmp(value, "false") == 0)
+            lua_pushboolean(L, 0);
+        else
+            return usage_error("%s: true or false expected, got '%s'", name, value);
+        break;
+    case OPT_LOCK: {
+        int st = push_lock_list(L, name, value);
+        if (st >= 0) return st;
+        break;
+    }
+    default:
+        if (o->kind == OPT_THRESHOLD && (strcmp(value, "off") == 0 || strcmp(value, "false") == 0))
+            lua_pushboolean(L, 0);
+        else if (lua_stringtonumber(L, value) == 0)
+            return usage_error("%s: number%s expected, got '%s'", name,
+                               o->kind == OPT_THRESHOLD ? " or off" : "", value);
+        break;
+    }
+    lua_setfield(L, opts, o->key);
+    return -1;
+}
+
+/* Reads the words after IN OUT into an option table; leaves the option
+ * table and the spelling table on the stack. */
+static int simplify_options(lua_State *L, const cli *c) {
+    lua_newtable(L);
+    int opts = lua_gettop(L);
+    lua_newtable(L);
+    int spell = lua_gettop(L);
+    for (int i = c->pairs; i < c->argc; i++) {
+        const char *a = c->argv[i];
+        const simplify_opt *o = NULL;
+        const char *value = NULL, *name = a;
+        if (strncmp(a, "--", 2) == 0) {
+            const char *eq = strchr(a, '=');
+            size_t len = eq ? (size_t)(eq - a) : strlen(a);
+            for (size_t k = 0; k < N_SIMPLIFY_OPTS && !o; k++)
+                if (strlen(simplify_opts[k].flag) == len && strncmp(simplify_opts[k].flag, a, len) == 0)
+                    o = &simplify_opts[k];
+            if (!o) return usage_error("unknown option '%.*s'", (int)len, a);
+            name = lua_pushlstring(L, a, len); /* popped at the end of the iteration */
+            if (eq) {
+                value = eq + 1;
+                if (o->kind == OPT_SWITCH)
+                    return usage_error("%s takes no value", name);
+            } else if (o->kind != OPT_SWITCH) {
+                if (i + 1 >= c->argc) return usage_error("%s needs a value", name);
+                value = c->argv[++i];
+            }
+        } else {
+            const char *eq = strchr(a, '=');
+            if (!eq || eq == a) return usage_error("expected name=value, got '%s'", a);
+            size_t len = (size_t)(eq - a);
+            for (size_t k = 0; k < N_SIMPLIFY_OPTS && !o; k++)
+                if (strlen(simplify_opts[k].key) == len && strncmp(simplify_opts[k].key, a, len) == 0)
+                    o = &simplify_opts[k];
+            if (!o)
+                return usage_error("unknown parameter '%.*s' (valid: %s)", (int)len, a, SIMPLIFY_KEYS);
+            name = lua_pushlstring(L, a, len);
+            value = eq + 1;
+        }
+        int st = set_simplify_opt(L, opts, spell, o, name, value);
+        if (st >= 0) return st;
+        lua_settop(L, spell);
+    }
+    femlod_simplify_options so = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    const char *key;
+    const char *msg = fl_simplify_read_options(L, opts, &so, "off", &key);
+    if (msg) {
+        if (!key) { /* the one message about two keys */
+            lua_getfield(L, spell, "target");
+            lua_getfield(L, spell, "ratio");
+            return usage_error("give %s or %s, not both", lua_tostring(L, -2), lua_tostring(L, -1));
+        }
+        lua_getfield(L, spell, key);
+        return usage_error("%s: %s", lua_tostring(L, -1), msg);
+    }
+    lua_settop(L, spell);
+    return -1;
+}
+
+static int cmd_simplify(lua_State *L, const cli *c) {
+    const char *in = c->argv[c->operand], *out = c->argv[c->operand + 1];
+    if (strncmp(in, "--", 2) == 0 || strncmp(out, "--", 2) == 0)
+        return usage_error("simplify: IN and OUT come first, then the options");
+    int st = simplify_options(L, c);
+    if (st >= 0) return st;
+    int spell = lua_gettop(L), opts = spell - 1;
+
+    luaL_requiref(L, "femlod", luaopen_femlod, 0);
+    int module = lua_gettop(L);
+    load_mesh(L, module, in, NULL);
+    int mesh = lua_gettop(L);
+    /* The lock indices against the mesh: a usage error too. */
+    if (lua_getfield(L, opts, "lock") == LUA_TTABLE) {
+        call_method(L, mesh, "counts", 0, 1);
+        lua_getfield(L, -1, "vertices");
+        lua_Integer nv = lua_tointeger(L, -1);
+        lua_pop(L, 2);
+        for (lua_Integer k = 1; lua_rawgeti(L, -1, k) == LUA_TNUMBER; k++) {
+            lua_Integer v = lua_tointeger(L, -1);
+            lua_pop(L, 1);
+            if (v > nv) {
+                lua_getfield(L, spell, "lock");
+                return usage_error("%s: vertex %lld out of range (1..%lld)", lua_tostring(L, -1),
+                                   (long long)v, (long long)nv);
+            }
+        }
+        lua_pop(L, 1);
+    }
+    lua_pop(L, 1);
+
+    lua_pushvalue(L, opts);
+    call_method(L, mesh, "simplify", 1, 1);
+    int h = lua_gettop(L);
+    call_method(L, h, "mesh", 0, 1);
+    int result = lua_gettop(L);
+    lua_pushstring(L, out);
+    call_method(L, result, "save", 1, 0);
+    if (c->quiet) return EXIT_OK;
+
+    lua_getglobal(L, "require");
+    lua_pushliteral(L, "femlod.report");
+    lua_call(L, 1, 1);
+    int report_mod = lua_gettop(L);
+    const char *name = base_name(in);
+    lua_getfield(L, report_mod, "header");
+    lua_call(L, 0, 1);
+    printf("%s\n", lua_tostring(L, -1));
+    static const char *const states[] = {"original", "simplified"};
+    for (int k = 0; k < 2; k++) {
+        lua_getfield(L, report_mod, "row");
+        lua_pushvalue(L, k == 0 ? mesh : result);
+        lua_pushstring(L, name);
+        lua_pushstring(L, states[k]);
+        lua_call(L, 3, 1);
+        printf("%s\n", lua_tostring(L, -1));
+    }
+    lua_getfield(L, report_mod, "stats");
+    lua_pushvalue(L, h);
+    lua_call(L, 1, 1);
+    printf("%s\n", lua_tostring(L, -1));
+    call_method(L, result, "counts", 0, 1);
+    lua_getfield(L, -1, "triangles");
+    lua_getfield(L, -2, "vertices");
+    femlod_format f = femlod_format_from_path(out);
+    printf("%s: %lld triangles, %lld vertices (%s)\n", out, (long long)lua_tointeger(L, -2),
+           (long long)lua_tointeger(L, -1), femlod_format_name(f));
+    return EXIT_OK;
+}
+
+/* }==================================================================== */
+
 static int pmain(lua_State *L) {
     cli c = {0};
     c.argc = (int)lua_tointeger(L, 1);
@@ -456,6 +702,7 @@ static int pmain(lua_State *L) {
         case CMD_EVAL: st = cmd_lua(L, &c); break;
         case CMD_INFO: st = cmd_info(L, &c); break;
         case CMD_CONVERT: st = cmd_convert(L, &c); break;
+        case CMD_SIMPLIFY: st = cmd_simplify(L, &c); break;
         case CMD_NONE: st = EXIT_USAGE; break;
         }
     }

@@ -66,4 +66,40 @@ FL_LUA_INTERNAL femlod_mesh **fl_lmesh_box(lua_State *L);
 
 /* }====== */
 
+/* {====== femlod.Hierarchy (lhierarchy.c) */
+
+#define FL_HIERARCHY_MT "femlod.Hierarchy"
+
+/* What femlod.simplify returns, and what the vertex hierarchy builds on: the
+ * members grow with it. The box is pushed zeroed (closed) and filled only
+ * when femlod_simplify succeeded, so a closed box is mesh == NULL; close()
+ * frees every member and zeroes the box. */
+typedef struct fl_hierarchy {
+    femlod_mesh *mesh;          /* the simplified mesh; NULL when closed */
+    femlod_collapse_log *log;   /* every collapse, in order */
+    femlod_simplify_result result;
+} fl_hierarchy;
+
+/* Creates the metatable, adds the module function simplify to the table on
+ * the top of the stack and the method simplify to femlod.Mesh (call it after
+ * fl_lmesh_open). */
+FL_LUA_INTERNAL void fl_lhierarchy_open(lua_State *L);
+/* The hierarchy at argument arg; raises on a wrong type or a closed one. */
+FL_LUA_INTERNAL fl_hierarchy *fl_lhierarchy_check(lua_State *L, int arg);
+
+/* Reads the simplify options that are plain values (every key but lock and
+ * progress) from the table at idx into *o, which the caller initialised.
+ * Unknown keys are the caller's business. Returns NULL when all is well;
+ * otherwise pushes and returns a message such as "number > 0 or false
+ * expected, got -1" and sets *key to the key it is about (NULL when the
+ * message names the keys itself). off is how the message spells a
+ * switched-off threshold ("false" in Lua, "off" on the command line). Raises
+ * only for memory errors, so that the program can make the message a usage
+ * error. */
+FL_LUA_INTERNAL const char *fl_simplify_read_options(lua_State *L, int idx,
+                                                     femlod_simplify_options *o,
+                                                     const char *off, const char **key);
+
+/* }====== */
+
 #endif

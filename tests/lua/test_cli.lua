@@ -1,8 +1,9 @@
 -- test_cli.lua: the femlod program from outside: exit codes (0 ok, 1 error,
 -- 2 usage), what goes to stdout and to stderr, the options-command-pairs
--- grammar, parameter conversion, -e, info, convert, --seed.
+-- grammar, parameter conversion, -e, info, convert, simplify, --seed.
 
 local T = dofile((arg[0]:match("^(.*)/") or ".") .. "/check.lua")
+local femlod = require "femlod"
 
 local P = params
 assert(P and P.femlod and P.tmp and P.shared and P.examples, "run through ctest: needs femlod=, tmp=, shared=, examples=")
@@ -41,7 +42,8 @@ do
   T.eq(code, 0, "--help exit")
   T.eq(err, "", "--help: nothing on stderr")
   for _, want in ipairs { "^usage: femlod %[options%] COMMAND", "\n  run RECIPE%.lua ", "\n  info MESH ",
-    "\n  convert IN OUT ", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-%-quiet ", "\n  %-%-traceback ",
+    "\n  convert IN OUT ", "\n  simplify IN OUT ", "%-%-target N | %-%-ratio R", "%-%-min%-stretch X",
+    "%-%-max%-normal%-change DEG", "%-%-keep%-boundary", "%-%-lock I,J,K", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-%-quiet ", "\n  %-%-traceback ",
     "Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded" } do
     T.check(out:find(want), "--help mentions " .. want)
   end
@@ -329,6 +331,123 @@ do
   code, out, err = run("convert", fandisk, P.tmp .. "/no_such_dir/x.stl")
   T.eq(code, 1, "convert into a missing folder fails")
   T.check(not T.exists(P.tmp .. "/no_such_dir/x.stl"), "nothing written")
+end
+-- }======
+
+-- {====== simplify
+do
+  local out = path("simplified.obj")
+  os.remove(out)
+  local code, text, err = run("simplify", fandisk, out, "--target", "3000", "--min-stretch", "0.3")
+  T.eq(code, 0, "simplify exit")
+  T.eq(err, "", "simplify: nothing on stderr")
+  local lines = {}
+  for l in text:gmatch("[^\n]*") do if l ~= "" then lines[#lines + 1] = l end end
+  T.eq(#lines, 8, "simplify prints 8 lines: " .. text)
+  T.eq(lines[1], "model (H x W x D) | state | elements | stretch (avg, min) | size (max) | valence (max)", "header")
+  T.eq(lines[2], "fandisk.obj (0.9206 x 0.5111 x 1) | original | 12946 | 0.744, 0.356 | 0.05466 | 9", "original row")
+  T.check(lines[3]:find("^fandisk%.obj %(0%.9206 x 0%.5111 x 1%) | simplified | 3000 | 0%.%d%d%d, 0%.%d%d%d | [%d.]+ | %d+$"),
+    "simplified row: " .. tostring(lines[3]))
+  local smin = tonumber(lines[3]:match("| 0%.%d%d%d, (0%.%d%d%d) |"))
+  T.check(smin and smin >= 0.3, "the row shows stretch min >= 0.3: " .. tostring(smin))
+  T.check(lines[4]:find("^stop: target; %d+ collapses %(0 in the pre%-phase%) in [%d.]+ s$"), "stop line: " .. tostring(lines[4]))
+  T.check(lines[5]:find("^rejected: tolerance %d+, deviation 0, stretch %d+, size %d+, valence %d+, foldover %d+, "
+    .. "topology %d+, intersection %d+$"), "rejected line: " .. tostring(lines[5]))
+  T.eq(lines[6], "violating input: 0 triangles; dropped degenerate: 0", "violating line")
+  T.check(lines[7]:find("^thresholds: target 3000, tolerance [%d.e+-]+, max_deviation off, min_stretch 0%.3, "),
+    "thresholds line: " .. tostring(lines[7]))
+  T.eq(lines[8], out .. ": 3000 triangles, 1502 vertices (obj)", "summary line")
+  local m = femlod.load(out)
+  T.eq(m:counts().triangles, 3000, "simplify wrote OUT")
+  T.check(m:quality().stretch_min >= 0.3, "OUT meets --min-stretch")
+
+  -- The name=value form is the same run: the same bytes.
+  local out2 = path("simplified2.obj")
+  code, text = run("--quiet", "simplify", fandisk, out2, "target=3000", "min_stretch=0.3")
+  T.eq(code, 0, "simplify with name=value")
+  T.eq(text, "", "--quiet: nothing printed")
+  T.check(T.readfile(out2) == T.readfile(out), "flags and name=value give byte-identical output")
+  code, text = run("simplify", fandisk, out2, "--target=3000", "--min-stretch=0.3")
+  T.check(T.readfile(out2) == T.readfile(out), "--flag=value too")
+
+  -- off, switches and lock
+  local out3 = path("simplified3.stl")
+  code, text, err = run("simplify", fandisk, out3, "--ratio", "0.5", "--max-valence", "off", "--tolerance", "off",
+    "--keep-boundary", "--area-weighted", "--lock", "1,2,3", "feature_angle=30")
+  T.eq(code, 0, "simplify with off, switches and lock: " .. err)
+  T.check(text:find("\nthresholds: target 6473, tolerance off, max_deviation off, min_stretch 0%.2, max_size [%d.]+, "
+    .. "max_valence off, feature_angle 30, "), "off shows in the thresholds line: " .. text)
+  T.check(text:find("\n" .. out3:gsub("%p", "%%%0") .. ": %d+ triangles, %d+ vertices %(stl%)\n$"), "STL summary")
+  local pos, set = femlod.load(fandisk):positions(), {}
+  for _, p in ipairs(femlod.load(out3):positions()) do set[string.format("%.9g %.9g %.9g", p[1], p[2], p[3])] = true end
+  local kept = 0
+  for i = 1, 3 do
+    local p = pos[i]
+    -- binary STL stores float32
+    local x, y, z = string.unpack("<fff", string.pack("<fff", p[1], p[2], p[3]))
+    if set[string.format("%.9g %.9g %.9g", x, y, z)] then kept = kept + 1 end
+  end
+  T.eq(kept, 3, "--lock 1,2,3 keeps those vertices")
+  -- Without --lock they do not all stay, so the check above measures the lock.
+  local out4 = path("simplified4.obj")
+  T.eq(run("simplify", fandisk, out4, "--ratio", "0.5", "--max-valence", "off", "--tolerance", "off",
+    "--keep-boundary", "--area-weighted", "feature_angle=30"), 0, "the same without --lock")
+  set = {}
+  for _, p in ipairs(femlod.load(out4):positions()) do set[string.format("%.17g %.17g %.17g", p[1], p[2], p[3])] = true end
+  kept = 0
+  for i = 1, 3 do kept = kept + (set[string.format("%.17g %.17g %.17g", pos[i][1], pos[i][2], pos[i][3])] and 1 or 0) end
+  T.check(kept < 3, "without --lock some of vertices 1-3 move: " .. kept .. " kept")
+
+  -- Usage errors: exit 2, nothing written, nothing on stdout.
+  local never = path("never_simplified.obj")
+  os.remove(never)
+  local function simplify_usage(first_line, ...)
+    usage(first_line, "simplify", fandisk, never, ...)
+    T.check(not T.exists(never), "no output after: " .. table.concat({ ... }, " "))
+  end
+  simplify_usage("femlod: unknown option '--bogus'", "--bogus")
+  simplify_usage("femlod: unknown option '--quiet'", "--target", "10", "--quiet")
+  simplify_usage("femlod: --target needs a value", "--target")
+  simplify_usage("femlod: --target: number expected, got 'many'", "--target", "many")
+  simplify_usage("femlod: --target: integer >= 1 expected, got 0", "--target", "0")
+  simplify_usage("femlod: target: integer >= 1 expected, got 2.5", "target=2.5")
+  simplify_usage("femlod: --ratio: number in (0, 1] expected, got 2", "--ratio", "2")
+  simplify_usage("femlod: give --target or ratio, not both", "--target", "100", "ratio=0.5")
+  simplify_usage("femlod: --min-stretch: number in (0, 1] or off expected, got -1", "--min-stretch", "-1")
+  simplify_usage("femlod: --max-size: number > 0 or off expected, got 0", "--max-size=0")
+  simplify_usage("femlod: --max-valence: integer >= 3 or off expected, got 2", "--max-valence", "2")
+  simplify_usage("femlod: --feature-angle: number in (0, 180] or off expected, got 200", "--feature-angle", "200")
+  simplify_usage("femlod: --tolerance: number or off expected, got 'none'", "--tolerance", "none")
+  simplify_usage("femlod: --keep-boundary takes no value", "--keep-boundary=yes")
+  simplify_usage("femlod: keep_boundary: true or false expected, got 'yes'", "keep_boundary=yes")
+  simplify_usage("femlod: --lock: list of vertex indices (1, 2, ...) expected, got '1,,2'", "--lock", "1,,2")
+  simplify_usage("femlod: --lock: list of vertex indices (1, 2, ...) expected, got '0'", "--lock", "0")
+  simplify_usage("femlod: --lock: vertex 6476 out of range (1..6475)", "--lock", "1,6476")
+  simplify_usage("femlod: option given twice: 'target'", "--target", "100", "target=200")
+  simplify_usage("femlod: unknown parameter 'targt' (valid: target, ratio, tolerance, max_deviation, min_stretch, "
+    .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, lock)",
+    "targt=100")
+  simplify_usage("femlod: expected name=value, got '3000'", "--keep-boundary", "3000")
+  usage("femlod: missing an input and an output file", "simplify", fandisk)
+  usage("femlod: simplify: IN and OUT come first, then the options", "simplify", "--target", "100", fandisk, never)
+
+  -- Failures: exit 1, no output file, an existing one untouched.
+  local bad = path("bad_simplify.obj")
+  T.writefile(bad, "v 0 0 0\nv 1 0 0\nf 1 2 3\n")
+  code, text, err = run("simplify", bad, never, "--target", "10")
+  T.eq(code, 1, "simplify of a bad file fails")
+  T.eq(text, "", "no report for a failed simplify")
+  T.check(err:find("^femlod: " .. bad:gsub("%p", "%%%0") .. ":3: "), "the error names the bad line: " .. err)
+  T.check(not T.exists(never), "no output after a failed simplify")
+  T.writefile(never, "keep me")
+  T.eq(run("simplify", bad, never), 1, "failed simplify over an existing file")
+  T.eq(T.readfile(never), "keep me", "existing output untouched")
+  T.eq(run("simplify", fandisk, never, "--target", "0"), 2, "usage error over an existing file")
+  T.eq(T.readfile(never), "keep me", "existing output untouched by a usage error")
+  code, text, err = run("simplify", fandisk, P.tmp .. "/no_such_dir/x.obj", "--target", "6000")
+  T.eq(code, 1, "simplify into a missing folder fails")
+  T.eq(text, "", "no report when OUT cannot be written")
+  T.check(not T.exists(P.tmp .. "/no_such_dir/x.obj"), "nothing written")
 end
 -- }======
 

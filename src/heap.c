@@ -1,0 +1,100 @@
+/*
+ * heap.c - indexed binary max-heap with update, the simplifier's priority
+ * queue (paper section 4.2.3: the edge with the largest priority index is
+ * collapsed first). Shaped after PMP's decimation heap (pmp/algorithms/
+ * heap.h): a position array per item makes update and removal O(log n), so
+ * the queue holds each edge once and never fills with stale copies.
+ */
+#include "heap.h"
+
+#include <stdlib.h>
+
+/* a goes before b */
+static inline int before(const fl_heap_entry *a, const fl_heap_entry *b) {
+    return a->key > b->key || (a->key == b->key && a->item < b->item);
+}
+
+int fl_heap_init(fl_heap *h, size_t capacity) {
+    h->n = 0;
+    h->capacity = capacity;
+    h->e = fl_alloc(capacity, sizeof *h->e);
+    h->pos = fl_alloc(capacity, sizeof *h->pos);
+    if (!h->e || !h->pos) {
+        fl_heap_free(h);
+        return 0;
+    }
+    for (size_t i = 0; i < capacity; i++) h->pos[i] = UINT32_MAX;
+    return 1;
+}
+
+void fl_heap_free(fl_heap *h) {
+    free(h->e);
+    free(h->pos);
+    h->e = NULL;
+    h->pos = NULL;
+    h->n = h->capacity = 0;
+}
+
+static void sift_up(fl_heap *h, size_t i) {
+    fl_heap_entry x = h->e[i];
+    while (i > 0) {
+        size_t p = (i - 1) / 2;
+        if (!before(&x, &h->e[p])) break;
+        h->e[i] = h->e[p];
+        h->pos[h->e[i].item] = (uint32_t)i;
+        i = p;
+    }
+    h->e[i] = x;
+    h->pos[x.item] = (uint32_t)i;
+}
+
+static void sift_down(fl_heap *h, size_t i) {
+    fl_heap_entry x = h->e[i];
+    size_t n = h->n;
+    for (;;) {
+        size_t c = 2 * i + 1;
+        if (c >= n) break;
+        if (c + 1 < n && before(&h->e[c + 1], &h->e[c])) c++;
+        if (!before(&h->e[c], &x)) break;
+        h->e[i] = h->e[c];
+        h->pos[h->e[i].item] = (uint32_t)i;
+        i = c;
+    }
+    h->e[i] = x;
+    h->pos[x.item] = (uint32_t)i;
+}
+
+void fl_heap_set(fl_heap *h, uint32_t item, double key) {
+    uint32_t p = h->pos[item];
+    if (p == UINT32_MAX) {
+        size_t i = h->n++;
+        h->e[i].key = key;
+        h->e[i].item = item;
+        sift_up(h, i);
+        return;
+    }
+    double old = h->e[p].key;
+    h->e[p].key = key;
+    if (key > old) sift_up(h, p);
+    else if (key < old) sift_down(h, p);
+}
+
+void fl_heap_remove(fl_heap *h, uint32_t item) {
+    uint32_t p = h->pos[item];
+    if (p == UINT32_MAX) return;
+    h->pos[item] = UINT32_MAX;
+    size_t last = --h->n;
+    if (p == last) return;
+    h->e[p] = h->e[last];
+    h->pos[h->e[p].item] = p;
+    if (p > 0 && before(&h->e[p], &h->e[(p - 1) / 2])) sift_up(h, p);
+    else sift_down(h, p);
+}
+
+uint32_t fl_heap_pop(fl_heap *h, double *key) {
+    if (h->n == 0) return UINT32_MAX;
+    uint32_t item = h->e[0].item;
+    if (key) *key = h->e[0].key;
+    fl_heap_remove(h, item);
+    return item;
+}

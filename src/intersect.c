@@ -1,0 +1,422 @@
+/*
+ * intersect.c - the geometric tests behind the simplifier's "no new triangle
+ * intersects another triangle" rule (method-notes.md "Valid edges"; issue 3),
+ * and the uniform grid that finds the triangles near a new one.
+ *
+ * Triangle-triangle: the interval method of Moller, "A fast triangle-triangle
+ * intersection test" (JGT 1997), with the plane-side classification snapped
+ * to zero within eps so that the nearly coplanar neighbours of a CAD face are
+ * handled by an exact-in-the-plane 2D test (as Guigue and Devillers, "Fast
+ * and robust triangle-triangle overlap test using orientation predicates",
+ * JGT 2003, do for the coplanar case), and with the corners and edge the two
+ * triangles share taken out of the question (as CGAL's
+ * Polygon_mesh_processing::does_self_intersect does): neighbours in a mesh
+ * always touch there, and only contact elsewhere is a self-intersection.
+ *
+ * Point-triangle distance: Ericson, "Real-Time Collision Detection", 5.1.5.
+ */
+#include "intersect.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static inline void sub3(double r[3], const double a[3], const double b[3]) {
+    r[0] = a[0] - b[0]; r[1] = a[1] - b[1]; r[2] = a[2] - b[2];
+}
+static inline double dot3(const double a[3], const double b[3]) {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static inline void cross3(double r[3], const double a[3], const double b[3]) {
+    r[0] = a[1] * b[2] - a[2] * b[1];
+    r[1] = a[2] * b[0] - a[0] * b[2];
+    r[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static inline double mn(double a, double b) { return a < b ? a : b; }
+static inline double mx(double a, double b) { return a > b ? a : b; }
+
+/* {====== 2D tests in the plane of a triangle (coplanar case) */
+
+typedef struct pt2 {
+    double x, y;
+} pt2;
+
+static inline double orient2(pt2 a, pt2 b, pt2 c) {
+    return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+}
+
+static inline int sgn(double v) { return (v > 0) - (v < 0); }
+
+/* Closed segments (touching counts). */
+static int seg_seg_2d(pt2 a, pt2 b, pt2 c, pt2 d) {
+    int o1 = sgn(orient2(a, b, c)), o2 = sgn(orient2(a, b, d));
+    int o3 = sgn(orient2(c, d, a)), o4 = sgn(orient2(c, d, b));
+    if (o1 * o2 < 0 && o3 * o4 < 0) return 1;
+    if (o1 == 0 && o2 == 0) { /* collinear: overlap of the projections */
+        double ax = mn(a.x, b.x), bx = mx(a.x, b.x), cx = mn(c.x, d.x), dx = mx(c.x, d.x);
+        double ay = mn(a.y, b.y), by = mx(a.y, b.y), cy = mn(c.y, d.y), dy = mx(c.y, d.y);
+        return ax <= dx && cx <= bx && ay <= dy && cy <= by;
+    }
+    if (o1 == 0 && o3 * o4 <= 0) return 1;
+    if (o2 == 0 && o3 * o4 <= 0) return 1;
+    if (o3 == 0 && o1 * o2 <= 0) return 1;
+    if (o4 == 0 && o1 * o2 <= 0) return 1;
+    return 0;
+}
+
+/* p inside or on triangle t. */
+static int pt_in_tri_2d(pt2 p, const pt2 t[3]) {
+    double a = orient2(t[0], t[1], p), b = orient2(t[1], t[2], p), c = orient2(t[2], t[0], p);
+    return (a >= 0 && b >= 0 && c >= 0) || (a <= 0 && b <= 0 && c <= 0);
+}
+
+static int seg_tri_2d(pt2 a, pt2 b, const pt2 t[3]) {
+    if (pt_in_tri_2d(a, t) || pt_in_tri_2d(b, t)) return 1;
+    for (int e = 0; e < 3; e++)
+        if (seg_seg_2d(a, b, t[e], t[(e + 1) % 3])) return 1;
+    return 0;
+}
+
+static int tri_tri_2d(const pt2 p[3], const pt2 q[3]) {
+    for (int e = 0; e < 3; e++)
+        for (int f = 0; f < 3; f++)
+            if (seg_seg_2d(p[e], p[(e + 1) % 3], q[f], q[(f + 1) % 3])) return 1;
+    return pt_in_tri_2d(p[0], q) || pt_in_tri_2d(q[0], p);
+}
+
+static void project(pt2 out[3], const double *const T[3], int axis) {
+    int u = axis == 0 ? 1 : 0, v = axis == 2 ? 1 : 2;
+    for (int c = 0; c < 3; c++) {
+        out[c].x = T[c][u];
+        out[c].y = T[c][v];
+    }
+}
+
+static int dominant_axis(const double n[3]) {
+    double ax = fabs(n[0]), ay = fabs(n[1]), az = fabs(n[2]);
+    return ax >= ay && ax >= az ? 0 : (ay >= az ? 1 : 2);
+}
+
+/* }====== */
+
+/* Signed distances of Q's corners to the plane of P, snapped to 0 within eps;
+ * corners shared with P (bit c of shared) lie on it by definition. Returns 1
+ * when the other corners are all strictly on one side: then Q meets P's
+ * plane at most in the shared corners. */
+static int plane_side(const double *const P[3], const double n[3], double nlen, const double *const Q[3],
+                      double d[3], double eps, unsigned shared) {
+    int pos = 0, neg = 0;
+    for (int c = 0; c < 3; c++) {
+        if (shared >> c & 1) {
+            d[c] = 0.0;
+            continue;
+        }
+        double r[3];
+        sub3(r, Q[c], P[0]);
+        double v = dot3(r, n) / nlen;
+        d[c] = fabs(v) <= eps ? 0.0 : v;
+        pos += d[c] > 0;
+        neg += d[c] < 0;
+        if (d[c] == 0.0) pos = neg = 4; /* on the plane: no verdict */
+    }
+    return (pos > 0 && neg == 0 && pos < 4) || (neg > 0 && pos == 0 && neg < 4);
+}
+
+/* Interval of triangle T on the line direction D, from the points where T
+ * meets the other plane (d: T's corners' snapped distances to it). */
+static void interval(const double *const T[3], const double d[3], const double D[3], double *lo,
+                     double *hi) {
+    double a = __builtin_inf(), b = -__builtin_inf();
+    for (int c = 0; c < 3; c++) {
+        if (d[c] == 0.0) {
+            double t = dot3(T[c], D);
+            a = mn(a, t);
+            b = mx(b, t);
+        }
+        int e = (c + 1) % 3;
+        if ((d[c] > 0 && d[e] < 0) || (d[c] < 0 && d[e] > 0)) {
+            double s = d[c] / (d[c] - d[e]), x[3];
+            for (int k = 0; k < 3; k++) x[k] = T[c][k] + s * (T[e][k] - T[c][k]);
+            double t = dot3(x, D);
+            a = mn(a, t);
+            b = mx(b, t);
+        }
+    }
+    *lo = a;
+    *hi = b;
+}
+
+int fl_tri_tri_intersect(const double *const P[3], const uint32_t pid[3], const double *const Q[3],
+                         const uint32_t qid[3], double eps) {
+    int sp[3] = {-1, -1, -1}, shared = 0; /* sp[c]: Q's corner equal to P's corner c */
+    for (int c = 0; c < 3; c++)
+        for (int e = 0; e < 3; e++)
+            if (pid[c] == qid[e]) {
+                sp[c] = e;
+                shared++;
+            }
+    if (shared >= 3) return 1;
+
+    double e1[3], e2[3], np[3], nq[3];
+    sub3(e1, P[1], P[0]);
+    sub3(e2, P[2], P[0]);
+    cross3(np, e1, e2);
+    sub3(e1, Q[1], Q[0]);
+    sub3(e2, Q[2], Q[0]);
+    cross3(nq, e1, e2);
+    double lp = sqrt(dot3(np, np)), lq = sqrt(dot3(nq, nq));
+    if (!(lp > 0.0) || !(lq > 0.0)) return 0; /* degenerate: the quality checks reject those */
+
+    if (shared == 2) {
+        /* Neighbours across an edge overlap only when folded flat onto each
+         * other: the opposite corners on the same side of the edge and the
+         * dihedral angle below about 0.6 degrees. */
+        int cp = sp[0] < 0 ? 0 : (sp[1] < 0 ? 1 : 2), cq = 0;
+        while (cq == sp[0] || cq == sp[1] || cq == sp[2]) cq++;
+        int a = (cp + 1) % 3, b = (cp + 2) % 3;
+        double u[3], x[3], y[3], cx[3], cy[3];
+        sub3(u, P[b], P[a]);
+        sub3(x, P[cp], P[a]);
+        sub3(y, Q[cq], P[a]);
+        cross3(cx, u, x);
+        cross3(cy, u, y);
+        double dxy = dot3(cx, cy);
+        if (dxy <= 0) return 0;
+        double c2 = dxy * dxy / (dot3(cx, cx) * dot3(cy, cy));
+        return c2 > 0.99990;
+    }
+
+    unsigned pmask = 0, qmask = 0;
+    for (int c = 0; c < 3; c++)
+        if (sp[c] >= 0) {
+            pmask |= 1u << c;
+            qmask |= 1u << sp[c];
+        }
+    double dq[3], dp[3];
+    if (plane_side(P, np, lp, Q, dq, eps, qmask)) return 0;
+    if (plane_side(Q, nq, lq, P, dp, eps, pmask)) return 0;
+
+    if (dq[0] == 0.0 && dq[1] == 0.0 && dq[2] == 0.0) {
+        /* coplanar within eps: decide in the plane */
+        pt2 p2[3], q2[3];
+        int axis = dominant_axis(np);
+        project(p2, P, axis);
+        project(q2, Q, axis);
+        if (shared == 0) return tri_tri_2d(p2, q2);
+        /* one shared corner v: apart when their angular sectors at v are
+         * (the common case of neighbours in a flat region); else the
+         * opposite edge of either meets the other */
+        int cp = sp[0] >= 0 ? 0 : (sp[1] >= 0 ? 1 : 2), cq = sp[cp];
+        {
+            pt2 v = p2[cp], p1 = p2[(cp + 1) % 3], p2b = p2[(cp + 2) % 3];
+            pt2 q1 = q2[(cq + 1) % 3], q2b = q2[(cq + 2) % 3];
+            double sp1 = orient2(v, p1, p2b); /* sector of P: from p1 to p2b, this turn */
+            if (sp1 < 0) {
+                pt2 t = p1;
+                p1 = p2b;
+                p2b = t;
+            }
+            double sq = orient2(v, q1, q2b);
+            if (sq < 0) {
+                pt2 t = q1;
+                q1 = q2b;
+                q2b = t;
+            }
+            /* Each sector (< 180 degrees) lies left of the line of its first
+             * ray and right of the line of its second; two such sectors meet
+             * only at v exactly when the line of one of the four rays
+             * separates them strictly. */
+            if ((orient2(v, p1, q1) < 0 && orient2(v, p1, q2b) < 0) ||
+                (orient2(v, p2b, q1) > 0 && orient2(v, p2b, q2b) > 0) ||
+                (orient2(v, q1, p1) < 0 && orient2(v, q1, p2b) < 0) ||
+                (orient2(v, q2b, p1) > 0 && orient2(v, q2b, p2b) > 0))
+                return 0;
+        }
+        return seg_tri_2d(p2[(cp + 1) % 3], p2[(cp + 2) % 3], q2) ||
+               seg_tri_2d(q2[(cq + 1) % 3], q2[(cq + 2) % 3], p2);
+    }
+
+    /* Moller: both triangles meet the line L of the two planes in an
+     * interval; they intersect when the intervals overlap. */
+    double D[3];
+    cross3(D, np, nq);
+    double dl = sqrt(dot3(D, D));
+    if (!(dl > 0.0)) return 0;
+    for (int k = 0; k < 3; k++) D[k] /= dl;
+    double a0, a1, b0, b1;
+    interval(P, dp, D, &a0, &a1);
+    interval(Q, dq, D, &b0, &b1);
+    double overlap = mn(a1, b1) - mx(a0, b0);
+    if (shared == 0) return overlap >= 0.0;
+    /* One shared corner lies in both intervals: only an overlap longer than
+     * the snapping tolerance is a real crossing. */
+    return overlap > eps;
+}
+
+double fl_point_tri_dist2(const double p[3], const double a[3], const double b[3], const double c[3]) {
+    double ab[3], ac[3], ap[3], q[3];
+    sub3(ab, b, a);
+    sub3(ac, c, a);
+    sub3(ap, p, a);
+    double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+    if (d1 <= 0 && d2 <= 0) return dot3(ap, ap);
+    double bp[3];
+    sub3(bp, p, b);
+    double d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+    if (d3 >= 0 && d4 <= d3) return dot3(bp, bp);
+    double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+        double v = d1 / (d1 - d3);
+        for (int k = 0; k < 3; k++) q[k] = a[k] + v * ab[k] - p[k];
+        return dot3(q, q);
+    }
+    double cp[3];
+    sub3(cp, p, c);
+    double d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+    if (d6 >= 0 && d5 <= d6) return dot3(cp, cp);
+    double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+        double w = d2 / (d2 - d6);
+        for (int k = 0; k < 3; k++) q[k] = a[k] + w * ac[k] - p[k];
+        return dot3(q, q);
+    }
+    double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+        double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        for (int k = 0; k < 3; k++) q[k] = b[k] + w * (c[k] - b[k]) - p[k];
+        return dot3(q, q);
+    }
+    double den = 1.0 / (va + vb + vc);
+    double v = vb * den, w = vc * den;
+    for (int k = 0; k < 3; k++) q[k] = a[k] + ab[k] * v + ac[k] * w - p[k];
+    return dot3(q, q);
+}
+
+/* {====== grid */
+
+int fl_grid_init(fl_grid *g, const double lo[3], const double hi[3], double h, size_t max_cells) {
+    memset(g, 0, sizeof *g);
+    if (!(h > 0.0)) h = 1.0;
+    if (max_cells < 1) max_cells = 1;
+    for (;;) {
+        size_t total = 1;
+        for (int k = 0; k < 3; k++) {
+            double ext = hi[k] - lo[k];
+            double n = floor(ext / h) + 1.0;
+            if (n > 1e6) n = 1e6;
+            g->n[k] = (int)n;
+            total *= (size_t)g->n[k];
+        }
+        if (total <= max_cells) break;
+        h *= 1.25;
+    }
+    g->h = h;
+    g->inv_h = 1.0 / h;
+    for (int k = 0; k < 3; k++) g->origin[k] = lo[k];
+    size_t cells = (size_t)g->n[0] * (size_t)g->n[1] * (size_t)g->n[2];
+    g->head = fl_alloc(cells, sizeof *g->head);
+    g->count = fl_calloc(cells, sizeof *g->count);
+    g->capblocks = cells / 2 + 1024;
+    g->blocks = fl_alloc(g->capblocks, sizeof *g->blocks);
+    g->free_block = UINT32_MAX;
+    if (!g->head || !g->count || !g->blocks) {
+        fl_grid_free(g);
+        return 0;
+    }
+    for (size_t c = 0; c < cells; c++) g->head[c] = UINT32_MAX;
+    return 1;
+}
+
+void fl_grid_free(fl_grid *g) {
+    free(g->head);
+    free(g->count);
+    free(g->blocks);
+    memset(g, 0, sizeof *g);
+}
+
+static inline int cell_coord(const fl_grid *g, double x, int k) {
+    double c = (x - g->origin[k]) * g->inv_h;
+    if (!(c > 0.0)) return 0; /* also NaN */
+    if (c >= (double)(g->n[k] - 1)) return g->n[k] - 1;
+    return (int)c;
+}
+
+void fl_grid_range(const fl_grid *g, const double lo[3], const double hi[3], int c0[3], int c1[3]) {
+    for (int k = 0; k < 3; k++) {
+        c0[k] = cell_coord(g, lo[k], k);
+        c1[k] = cell_coord(g, hi[k], k);
+    }
+}
+
+static uint32_t new_block(fl_grid *g) {
+    if (g->free_block != UINT32_MAX) {
+        uint32_t b = g->free_block;
+        g->free_block = g->blocks[b].next;
+        return b;
+    }
+    if (g->nblocks == g->capblocks) {
+        size_t cap = g->capblocks * 2;
+        if (cap >= UINT32_MAX) return UINT32_MAX;
+        fl_grid_block *nb = fl_realloc(g->blocks, cap, sizeof *nb);
+        if (!nb) return UINT32_MAX;
+        g->blocks = nb;
+        g->capblocks = cap;
+    }
+    return (uint32_t)g->nblocks++;
+}
+
+int fl_grid_insert(fl_grid *g, uint32_t item, const double lo[3], const double hi[3]) {
+    int c0[3], c1[3];
+    fl_grid_range(g, lo, hi, c0, c1);
+    for (int z = c0[2]; z <= c1[2]; z++)
+        for (int y = c0[1]; y <= c1[1]; y++)
+            for (int x = c0[0]; x <= c1[0]; x++) {
+                size_t c = fl_grid_cell(g, x, y, z);
+                uint32_t fill = g->count[c] % FL_GRID_BLOCK;
+                if (fill == 0) { /* head full or absent */
+                    uint32_t b = new_block(g);
+                    if (b == UINT32_MAX) return 0;
+                    g->blocks[b].next = g->head[c];
+                    g->head[c] = b;
+                }
+                g->blocks[g->head[c]].item[fill] = item;
+                g->count[c]++;
+            }
+    return 1;
+}
+
+void fl_grid_remove(fl_grid *g, uint32_t item, const double lo[3], const double hi[3]) {
+    int c0[3], c1[3];
+    fl_grid_range(g, lo, hi, c0, c1);
+    for (int z = c0[2]; z <= c1[2]; z++)
+        for (int y = c0[1]; y <= c1[1]; y++)
+            for (int x = c0[0]; x <= c1[0]; x++) {
+                size_t c = fl_grid_cell(g, x, y, z);
+                uint32_t n = g->count[c];
+                if (n == 0) continue;
+                uint32_t hb = g->head[c], last = (n - 1) % FL_GRID_BLOCK;
+                /* find the item: the head holds last+1 items, the rest full blocks */
+                uint32_t b = hb, lim = last + 1;
+                int found = 0;
+                while (b != UINT32_MAX && !found) {
+                    for (uint32_t s = 0; s < lim; s++)
+                        if (g->blocks[b].item[s] == item) {
+                            g->blocks[b].item[s] = g->blocks[hb].item[last];
+                            found = 1;
+                            break;
+                        }
+                    b = g->blocks[b].next;
+                    lim = FL_GRID_BLOCK;
+                }
+                if (!found) continue;
+                g->count[c] = n - 1;
+                if (last == 0) {
+                    g->head[c] = g->blocks[hb].next;
+                    g->blocks[hb].next = g->free_block;
+                    g->free_block = hb;
+                }
+            }
+}
+
+/* }====== */

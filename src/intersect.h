@@ -1,0 +1,66 @@
+/*
+ * intersect.h - triangle-triangle intersection with shared corners, point to
+ * triangle distance, and the uniform grid the simplifier keeps its triangles
+ * in (internal; see intersect.c and docs/simplify.md "Intersection test").
+ */
+#ifndef FEMLOD_INTERSECT_H
+#define FEMLOD_INTERSECT_H
+
+#include "core.h"
+
+/* 1 when triangles P and Q (corner positions P[c], Q[c] and vertex ids
+ * pid[c], qid[c]) meet anywhere other than in the corners and the edge they
+ * share (by id). Points closer than eps to a plane count as on it, and
+ * touching counts as meeting, so the answer errs towards "intersects".
+ * Triangles sharing all three ids are reported as intersecting. */
+FL_INTERNAL int fl_tri_tri_intersect(const double *const P[3], const uint32_t pid[3],
+                                     const double *const Q[3], const uint32_t qid[3], double eps);
+
+/* Squared distance from p to triangle (a, b, c) (Ericson, Real-Time
+ * Collision Detection, 5.1.5). */
+FL_INTERNAL double fl_point_tri_dist2(const double p[3], const double a[3], const double b[3],
+                                      const double c[3]);
+
+/* {====== uniform grid of items (triangle slots) by bounding box.
+ * An item is listed in every cell its box overlaps; cells outside the grid's
+ * box clamp to the border cells, identically for insert, remove and query,
+ * so a point that leaves the original box stays findable. Cell lists are
+ * chains of fixed blocks from one pool: no allocation per cell. */
+
+#define FL_GRID_BLOCK 7
+
+typedef struct fl_grid_block {
+    uint32_t item[FL_GRID_BLOCK];
+    uint32_t next;
+} fl_grid_block;
+
+typedef struct fl_grid {
+    double origin[3], inv_h, h;
+    int n[3];
+    uint32_t *head;  /* per cell: first block (the partly filled one), UINT32_MAX if none */
+    uint32_t *count; /* per cell: items */
+    fl_grid_block *blocks;
+    size_t nblocks, capblocks;
+    uint32_t free_block;
+} fl_grid;
+
+/* Grid over [lo, hi] with cells of about edge h, enlarged so that there are
+ * at most max_cells cells. 0 on ENOMEM. */
+FL_INTERNAL int fl_grid_init(fl_grid *g, const double lo[3], const double hi[3], double h,
+                             size_t max_cells);
+FL_INTERNAL void fl_grid_free(fl_grid *g);
+/* 0 on ENOMEM. */
+FL_INTERNAL int fl_grid_insert(fl_grid *g, uint32_t item, const double lo[3], const double hi[3]);
+/* The box must be the one the item was inserted with. */
+FL_INTERNAL void fl_grid_remove(fl_grid *g, uint32_t item, const double lo[3], const double hi[3]);
+/* Cell index range [c0, c1] (inclusive) covering a box. */
+FL_INTERNAL void fl_grid_range(const fl_grid *g, const double lo[3], const double hi[3], int c0[3],
+                               int c1[3]);
+
+static inline size_t fl_grid_cell(const fl_grid *g, int x, int y, int z) {
+    return ((size_t)z * (size_t)g->n[1] + (size_t)y) * (size_t)g->n[0] + (size_t)x;
+}
+
+/* }====== */
+
+#endif

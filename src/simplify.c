@@ -1,0 +1,1924 @@
+/*
+ * simplify.c - quality-controlled edge-collapse simplification.
+ *
+ * Implements paper.md section 4 (Lee et al., "Mesh simplification and
+ * adaptive LOD for finite element mesh generation") as corrected and settled
+ * by method-notes.md; docs/simplify.md maps each step to the functions here
+ * and records the choices and the measurements behind them.
+ *
+ *   4.1 (1)-(4) quadrics        setup_quadrics, quadric.h (Garland and Heckbert,
+ *                               SIGGRAPH 1997, plus line quadrics on features)
+ *   4.1 2)-3) size, stretch     new_tri_check (squared forms, no sqrt to compare)
+ *   4.2.1 candidates            evaluate: midpoint and robust optimum
+ *                               (fl_quadric_optimum2), endpoints for fixed
+ *                               vertices and feature lines
+ *   4.2.2 validity C1-C4        evaluate / eval_candidate (cheap checks) and
+ *                               expensive_checks (normal cones, after PMP's
+ *                               decimation; max_deviation as PMP's Hausdorff
+ *                               check; triangle intersections, intersect.c)
+ *   4.2.2 pre-phase             phase 0 of simplify_run
+ *   4.2.3 priority              rho = Sz_DIF * St_MIN * St_AVE in eval_candidate
+ *   4.2 step 4 / 5.1 log        collapse, simplify_log.c
+ *
+ * Topology (link condition, Dey et al., "Topology preserving edge
+ * contraction", 1999; the tetrahedron and handle cases as in OpenMesh's
+ * is_collapse_ok) is checked in gather.
+ *
+ * Structure: vertices keep their incident faces in one growing reference
+ * array (a new vertex's list is appended; the merged vertex takes the slot
+ * of i); faces keep their corners and the edges of their sides; edges are
+ * numbered once at setup (collapses only remove and merge edges) and are the
+ * items of an indexed max-heap. Every choice that could depend on order is
+ * made on indices, so results repeat bit for bit.
+ */
+#include "core.h"
+#include "heap.h"
+#include "intersect.h"
+#include "quadric.h"
+#include "simplify_log.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define PI 3.14159265358979323846
+
+/* Tunables, fixed by the measurements in docs/simplify.md; -D overrides
+ * them for experiments only. */
+#ifndef FEMLOD_SIMPLIFY_DEFAULT_TOLERANCE
+#define FEMLOD_SIMPLIFY_DEFAULT_TOLERANCE 4.0 /* times (mean input edge)^2 */
+#endif
+#ifndef FEMLOD_SIMPLIFY_GRID_CELL
+#define FEMLOD_SIMPLIFY_GRID_CELL 1.0 /* grid cell edge / mean edge length */
+#endif
+#ifndef FEMLOD_SIMPLIFY_SZDIF_RING
+#define FEMLOD_SIMPLIFY_SZDIF_RING 1 /* Sz_DIF over every triangle at i or j */
+#endif
+#ifndef FL_NO_CONE
+#define FL_NO_CONE 0
+#endif
+#ifndef FEMLOD_SIMPLIFY_EIGEN_REL
+#define FEMLOD_SIMPLIFY_EIGEN_REL 1e-3 /* eigen directions kept in the optimum */
+#endif
+#ifndef FEMLOD_SIMPLIFY_LINE_TURN
+#define FEMLOD_SIMPLIFY_LINE_TURN 20.0 /* degrees: a feature line this straight takes midpoints */
+#endif
+#ifndef FEMLOD_SIMPLIFY_LAZY
+#define FEMLOD_SIMPLIFY_LAZY 0
+#endif
+#ifndef FEMLOD_SIMPLIFY_USE_OPTIMUM
+#define FEMLOD_SIMPLIFY_USE_OPTIMUM 1
+#endif
+#ifndef FEMLOD_SIMPLIFY_OPT_WHEN_MID_FAILS
+#define FEMLOD_SIMPLIFY_OPT_WHEN_MID_FAILS 1
+#endif
+
+/* vertex flags */
+enum {
+    V_DEAD = 1,
+    V_FIXED = 2,      /* corner, locked, non-manifold or kept boundary: never moves */
+    V_BOUNDARY = 4,
+    V_NONMANIFOLD = 8
+};
+/* edge flags */
+enum {
+    E_FEATURE = 1,
+    E_DEAD = 2,
+    E_TOLFAIL = 4 /* last evaluation: every candidate failed C1 only; stays so while i and j do */
+};
+
+/* candidate modes */
+enum {
+    M_FREE,   /* midpoint and optimum */
+    M_KEEP_I, /* k = p_i (i fixed, or on a feature line that j is not on) */
+    M_KEEP_J,
+    M_LINE    /* i and j on one feature line: the endpoints, and the midpoint where the line is straight */
+};
+
+#define NO_REASON (-1)
+#define MAX_VSTARS 253
+
+static size_t dbg_evals, dbg_pops, dbg_exp, dbg_retry, dbg_items, dbg_tt, dbg_cells;
+typedef struct ring {
+    uint32_t e, i, j;
+    size_t n, cap;   /* surviving faces of i and j: the new triangles (k, a, b) */
+    uint32_t *face;
+    uint32_t *a, *b;
+    uint8_t *from_j;
+    double *lab;     /* |a - b| */
+    double *lab2;
+    size_t ns;       /* faces with both i and j (removed) */
+    uint32_t sface[2], sopp[2];
+    int mode;
+    int newval;
+    double szdif;
+    double st_removed; /* pre-phase: least stretch of the faces a collapse removes or changes */
+    /* candidates */
+    int ncand;
+    double cand[3][3];
+    double rho[3];
+    int ok[3];
+    int reason;      /* first failing check of the last candidate */
+    int tolfail;     /* every candidate failed C1 and nothing else before it */
+} ring;
+
+typedef struct simp {
+    /* resolved thresholds */
+    size_t target;
+    double tol, maxdev, minst, maxsz, feat_angle, feat_w, max_nc;
+    int maxval, keep_boundary, area_w;
+    int tol_on, dev_on, st_on, sz_on, val_on, cone_on;
+    double minst2, maxsz2, cos_nc, cos_nc2, maxdev2, eps;
+    int szdif_ring; /* Sz_DIF over every triangle at i or j (1) or the edge's two (0) */
+    int opt_when_mid_fails;
+
+    /* vertices: slot s holds input vertex node[s] at first (Morton order) */
+    size_t nv;
+    uint32_t *slot_of; /* during setup: input index -> slot */
+    const double *pos0; /* the input positions */
+    double *pos;
+    fl_quadric *q;
+    uint32_t *node;
+    uint32_t *fstart, *fcount;
+    uint32_t *val;
+    uint8_t *vflag;
+    uint8_t *fdeg;
+    uint32_t *vmark;
+    uint32_t *refs;
+    size_t nrefs, caprefs;
+
+    /* faces */
+    size_t nt, live;
+    uint32_t *tri, *tedge;
+    float *fn;   /* unit normal (0 for degenerate) */
+    float *fsz;  /* longest edge */
+    float *cone; /* axis xyz, half-angle (radians) */
+    uint32_t *fmark;
+    uint32_t *fpt; /* deviation: first removed input vertex assigned to the face */
+    uint32_t *pnext;
+
+    /* edges */
+    size_t ne;
+    uint32_t *ev;
+    uint16_t *enf;
+    uint8_t *eflag;
+    uint32_t *emark;
+
+    fl_heap heap;
+    fl_grid grid;
+    size_t grid_live; /* live faces when the grid was built */
+    double grid_h;
+    uint32_t stamp, fstamp;
+
+    ring R;
+    /* scratch */
+    uint32_t *ebuf;
+    size_t ebuf_cap;
+    uint32_t *pbuf; /* deviation points */
+    uint32_t *pdst; /* their new face (ring index) */
+    size_t pbuf_cap, pdst_cap;
+    size_t npts;    /* points gathered by the last deviation check */
+    double *tbox;   /* per ring face: box of the new triangle */
+    size_t tbox_cap;
+    float *newcone; /* per ring face */
+    size_t newcone_cap;
+    uint32_t vstars[MAX_VSTARS + 2];
+    uint8_t lfaces[3 * 1024];
+
+    int phase;
+    femlod_collapse_log *log;
+    size_t collapses, prephase;
+    size_t rejected[FEMLOD_REJECT_COUNT];
+    int oom;
+} simp;
+
+/* {====== small vector helpers */
+
+/* fmin/fmax are calls (NaN rules); no NaN reaches these */
+static inline double mn(double a, double b) { return a < b ? a : b; }
+static inline double mx(double a, double b) { return a > b ? a : b; }
+
+static inline void sub3(double r[3], const double a[3], const double b[3]) {
+    r[0] = a[0] - b[0]; r[1] = a[1] - b[1]; r[2] = a[2] - b[2];
+}
+static inline double dot3(const double a[3], const double b[3]) {
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+static inline void cross3(double r[3], const double a[3], const double b[3]) {
+    r[0] = a[1] * b[2] - a[2] * b[1];
+    r[1] = a[2] * b[0] - a[0] * b[2];
+    r[2] = a[0] * b[1] - a[1] * b[0];
+}
+static inline double dist2(const double a[3], const double b[3]) {
+    double d[3];
+    sub3(d, a, b);
+    return dot3(d, d);
+}
+
+/* Stretch (4.1 3), method-notes "Element measures") from the corners. */
+static double tri_stretch(const double *a, const double *b, const double *c, double *size) {
+    double la = sqrt(dist2(b, c)), lb = sqrt(dist2(a, c)), lc = sqrt(dist2(a, b));
+    double L = mx(la, mx(lb, lc));
+    if (size) *size = L;
+    double s = 0.5 * (la + lb + lc);
+    if (!(L > 0.0) || !(s > 0.0)) return 0.0;
+    double r2 = (s - la) * (s - lb) * (s - lc) / s;
+    if (!(r2 > 0.0)) return 0.0;
+    return sqrt(12.0 * r2) / L;
+}
+
+/* }====== */
+
+/* {====== faces */
+
+static inline const double *P(const simp *S, uint32_t v) { return S->pos + 3 * (size_t)v; }
+
+static void face_bbox(const simp *S, uint32_t f, double lo[3], double hi[3]) {
+    const uint32_t *t = S->tri + 3 * (size_t)f;
+    const double *a = P(S, t[0]), *b = P(S, t[1]), *c = P(S, t[2]);
+    for (int k = 0; k < 3; k++) {
+        lo[k] = mn(a[k], mn(b[k], c[k]));
+        hi[k] = mx(a[k], mx(b[k], c[k]));
+    }
+}
+
+static void face_update_cache(simp *S, uint32_t f) {
+    const uint32_t *t = S->tri + 3 * (size_t)f;
+    const double *a = P(S, t[0]), *b = P(S, t[1]), *c = P(S, t[2]);
+    double e1[3], e2[3], n[3];
+    sub3(e1, b, a);
+    sub3(e2, c, a);
+    cross3(n, e1, e2);
+    double l = sqrt(dot3(n, n));
+    for (int k = 0; k < 3; k++) S->fn[3 * (size_t)f + k] = l > 0 ? (float)(n[k] / l) : 0.0f;
+    double L2 = mx(dot3(e1, e1), mx(dot3(e2, e2), dist2(b, c)));
+    S->fsz[f] = (float)sqrt(L2);
+}
+
+static inline int face_alive(const simp *S, uint32_t f) { return S->tri[3 * (size_t)f] != UINT32_MAX; }
+
+/* }====== */
+
+/* {====== normal cones (PMP's NormalCone, pmp/algorithms/normal_cone.h) */
+
+static void cone_merge(float c[4], const double n2[3], double a2) {
+    double n1[3] = {c[0], c[1], c[2]}, a1 = c[3];
+    double dp = dot3(n1, n2);
+    if (dp > 0.99999) {
+        c[3] = (float)mx(a1, a2);
+        return;
+    }
+    if (dp < -0.99999) {
+        c[3] = (float)PI;
+        return;
+    }
+    double ca = acos(dp);
+    double amin = mn(-a1, ca - a2), amax = mx(a1, ca + a2);
+    double ang = 0.5 * (amax - amin), axis = 0.5 * (amin + amax);
+    double s = sin(ca), w1 = sin(ca - axis) / s, w2 = sin(axis) / s;
+    double m[3];
+    for (int k = 0; k < 3; k++) m[k] = w1 * n1[k] + w2 * n2[k];
+    double l = sqrt(dot3(m, m));
+    if (l > 0)
+        for (int k = 0; k < 3; k++) c[k] = (float)(m[k] / l);
+    c[3] = (float)ang;
+}
+
+/* }====== */
+
+/* {====== growing scratch */
+
+static int ring_reserve(ring *R, size_t n) {
+    if (n <= R->cap) return 1;
+    size_t c = R->cap ? R->cap : 32;
+    while (c < n) c *= 2;
+    uint32_t *f = fl_realloc(R->face, c, sizeof *f);
+    if (f) R->face = f;
+    uint32_t *a = fl_realloc(R->a, c, sizeof *a);
+    if (a) R->a = a;
+    uint32_t *b = fl_realloc(R->b, c, sizeof *b);
+    if (b) R->b = b;
+    uint8_t *fj = fl_realloc(R->from_j, c, sizeof *fj);
+    if (fj) R->from_j = fj;
+    double *l = fl_realloc(R->lab, c, sizeof *l);
+    if (l) R->lab = l;
+    double *l2 = fl_realloc(R->lab2, c, sizeof *l2);
+    if (l2) R->lab2 = l2;
+    if (!f || !a || !b || !fj || !l || !l2) return 0;
+    R->cap = c;
+    return 1;
+}
+
+static int buf_reserve(void **p, size_t *cap, size_t n, size_t elem) {
+    if (n <= *cap) return 1;
+    size_t c = *cap ? *cap : 64;
+    while (c < n) c *= 2;
+    void *q = fl_realloc(*p, c, elem);
+    if (!q) return 0;
+    *p = q;
+    *cap = c;
+    return 1;
+}
+
+static uint32_t next_stamp(simp *S) {
+    if (++S->stamp == 0) { /* wrapped: clear */
+        memset(S->vmark, 0, S->nv * sizeof *S->vmark);
+        memset(S->emark, 0, S->ne * sizeof *S->emark);
+        S->stamp = 1;
+    }
+    return S->stamp;
+}
+
+static uint32_t next_fstamp(simp *S) {
+    if (++S->fstamp == 0) {
+        memset(S->fmark, 0, S->nt * sizeof *S->fmark);
+        S->fstamp = 1;
+    }
+    return S->fstamp;
+}
+
+/* }====== */
+
+/* {====== gather: the position-independent part of an edge's evaluation */
+
+static inline int is_line(const simp *S, uint32_t v) { return S->fdeg[v] == 2 && !(S->vflag[v] & V_FIXED); }
+
+/* Returns NO_REASON when the edge may be collapsed (position aside) and
+ * fills R; otherwise the reason. */
+static int gather(simp *S, ring *R, uint32_t e) {
+    uint32_t i = S->ev[2 * (size_t)e], j = S->ev[2 * (size_t)e + 1];
+    R->e = e;
+    R->i = i;
+    R->j = j;
+    R->n = 0;
+    R->ns = 0;
+    uint8_t fi = S->vflag[i], fj = S->vflag[j];
+    unsigned nf = S->enf[e];
+    int feature = (S->eflag[e] & E_FEATURE) != 0;
+
+    /* Which positions may k take (method-notes "Optimal position"): fixed
+     * vertices stay, a vertex on one feature line only slides along it,
+     * two features never merge across a non-feature edge. */
+    if (nf == 0 || nf > 2 || ((fi | fj) & V_NONMANIFOLD)) return FEMLOD_REJECT_TOPOLOGY;
+    int fixi = (fi & V_FIXED) != 0, fixj = (fj & V_FIXED) != 0;
+    int feati = S->fdeg[i] > 0, featj = S->fdeg[j] > 0;
+    if (fixi && fixj) return FEMLOD_REJECT_TOPOLOGY;
+    if (fixi) {
+        if (featj && !feature) return FEMLOD_REJECT_TOPOLOGY;
+        R->mode = M_KEEP_I;
+    } else if (fixj) {
+        if (feati && !feature) return FEMLOD_REJECT_TOPOLOGY;
+        R->mode = M_KEEP_J;
+    } else if (feati && featj) {
+        if (!feature) return FEMLOD_REJECT_TOPOLOGY;
+        R->mode = M_LINE; /* both on the line: slide along it */
+    } else if (feati) {
+        R->mode = M_KEEP_I;
+    } else if (featj) {
+        R->mode = M_KEEP_J;
+    } else {
+        R->mode = M_FREE;
+    }
+    (void)is_line;
+
+    /* C4 (method-notes "Valid edges"): val(i) + val(j) - 4 interior, - 3 boundary. */
+    int boundary_edge = nf == 1;
+    if (!boundary_edge && (fi & V_BOUNDARY) && (fj & V_BOUNDARY))
+        return FEMLOD_REJECT_TOPOLOGY; /* would pinch the surface at k */
+    int newval = (int)S->val[i] + (int)S->val[j] - (boundary_edge ? 3 : 4);
+    R->newval = newval;
+    if (S->val_on && newval > S->maxval) return FEMLOD_REJECT_VALENCE;
+    if (newval < (boundary_edge ? 2 : 3) || newval > MAX_VSTARS - 2) return FEMLOD_REJECT_TOPOLOGY;
+
+    size_t need = (size_t)S->fcount[i] + S->fcount[j];
+    if (!ring_reserve(R, need)) {
+        S->oom = 1;
+        return FEMLOD_REJECT_TOPOLOGY;
+    }
+    double szsum = 0.0;
+    size_t szn = 0;
+    double stmin = 2.0;
+    for (int side = 0; side < 2; side++) {
+        uint32_t v = side ? j : i, o = side ? i : j;
+        const uint32_t *fl = S->refs + S->fstart[v];
+        uint32_t cnt = S->fcount[v];
+        for (uint32_t m = 0; m < cnt; m++) {
+            uint32_t f = fl[m];
+            const uint32_t *t = S->tri + 3 * (size_t)f;
+            int c = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+            uint32_t a = t[(c + 1) % 3], b = t[(c + 2) % 3];
+            if (S->szdif_ring) {
+                szsum += 1.0 / (double)S->fsz[f];
+                szn++;
+            }
+            if (S->phase == 0 && (side == 0 || (a != o && b != o))) {
+                double st = tri_stretch(P(S, t[0]), P(S, t[1]), P(S, t[2]), NULL);
+                if (st < stmin) stmin = st;
+            }
+            if (a == o || b == o) {
+                if (side == 0) {
+                    if (R->ns == 2) return FEMLOD_REJECT_TOPOLOGY;
+                    R->sface[R->ns] = f;
+                    R->sopp[R->ns] = a == o ? b : a;
+                    R->ns++;
+                    if (!S->szdif_ring) {
+                        szsum += 1.0 / (double)S->fsz[f];
+                        szn++;
+                    }
+                }
+                continue;
+            }
+            size_t r = R->n++;
+            R->face[r] = f;
+            R->a[r] = a;
+            R->b[r] = b;
+            R->from_j[r] = (uint8_t)side;
+            R->lab2[r] = dist2(P(S, a), P(S, b));
+            R->lab[r] = sqrt(R->lab2[r]);
+        }
+    }
+    if (R->ns != nf) return FEMLOD_REJECT_TOPOLOGY;
+    if (R->ns == 2 && R->sopp[0] == R->sopp[1]) return FEMLOD_REJECT_TOPOLOGY;
+    R->szdif = szn ? szsum / (double)szn : 1.0;
+    R->st_removed = stmin;
+
+    /* the opposite vertices lose a neighbour: keep them at least triangular */
+    for (size_t s = 0; s < R->ns; s++) {
+        uint32_t x = R->sopp[s];
+        unsigned minval = (S->vflag[x] & V_BOUNDARY) ? 2 : 3;
+        if (S->val[x] - 1 < minval) return FEMLOD_REJECT_TOPOLOGY;
+        if (S->vflag[x] & V_NONMANIFOLD) return FEMLOD_REJECT_TOPOLOGY;
+    }
+    /* two feature edges of one removed face would merge into one */
+    for (size_t s = 0; s < R->ns; s++) {
+        const uint32_t *te = S->tedge + 3 * (size_t)R->sface[s];
+        int nfeat = 0;
+        for (int c = 0; c < 3; c++)
+            if (te[c] != e && (S->eflag[te[c]] & E_FEATURE)) nfeat++;
+        if (nfeat == 2) return FEMLOD_REJECT_TOPOLOGY;
+    }
+
+    /* Link condition: the common neighbours of i and j are exactly the
+     * opposite vertices of the faces on the edge (no handle pinched, no
+     * duplicate face, no tetrahedron closed). */
+    uint32_t mi = next_stamp(S);
+    uint32_t mj = next_stamp(S);
+    for (size_t r = 0; r < R->n; r++)
+        if (!R->from_j[r]) S->vmark[R->a[r]] = S->vmark[R->b[r]] = mi;
+    for (size_t s = 0; s < R->ns; s++) S->vmark[R->sopp[s]] = mi;
+    unsigned common = 0;
+    for (size_t r = 0; r < R->n; r++) {
+        if (!R->from_j[r]) continue;
+        uint32_t ab[2] = {R->a[r], R->b[r]};
+        for (int q = 0; q < 2; q++) {
+            uint32_t x = ab[q];
+            if (S->vmark[x] == mi) {
+                S->vmark[x] = mj;
+                common++;
+            }
+        }
+    }
+    /* the opposite vertices are neighbours of j through the shared faces only
+     * when j has no other face at them; count them once */
+    for (size_t s = 0; s < R->ns; s++) {
+        uint32_t x = R->sopp[s];
+        if (S->vmark[x] == mi) {
+            S->vmark[x] = mj;
+            common++;
+        }
+    }
+    if (common != R->ns) return FEMLOD_REJECT_TOPOLOGY;
+    return NO_REASON;
+}
+
+/* }====== */
+
+/* {====== candidates: C1-C3, foldover against the current mesh, priority */
+
+static int eval_candidate(simp *S, ring *R, const double p[3], double *rho) {
+    const fl_quadric *qi = S->q + R->i, *qj = S->q + R->j;
+    if (S->tol_on && fl_quadric_eval2(qi, qj, p) > S->tol) return FEMLOD_REJECT_TOLERANCE;
+    double stsum = 0.0, stmin = 2.0;
+    for (size_t r = 0; r < R->n; r++) {
+        const double *a = P(S, R->a[r]), *b = P(S, R->b[r]);
+        double ea[3], eb[3], n[3];
+        sub3(ea, a, p);
+        sub3(eb, b, p);
+        double la2 = dot3(ea, ea), lb2 = dot3(eb, eb), lab2 = R->lab2[r];
+        double L2 = mx(la2, mx(lb2, lab2));
+        if (S->sz_on && L2 > S->maxsz2) return FEMLOD_REJECT_SIZE;
+        cross3(n, ea, eb);
+        double n2 = dot3(n, n);
+        if (!(n2 > 0.0)) return FEMLOD_REJECT_STRETCH;
+        /* foldover: the normal may not flip nor turn past max_normal_change */
+        const float *fo = S->fn + 3 * (size_t)R->face[r];
+        double d = n[0] * fo[0] + n[1] * fo[1] + n[2] * fo[2];
+        if (fo[0] != 0.0f || fo[1] != 0.0f || fo[2] != 0.0f) {
+            if (d <= 0.0) return FEMLOD_REJECT_FOLDOVER;
+            if (S->cos_nc > 0.0 && d * d < S->cos_nc2 * n2) return FEMLOD_REJECT_FOLDOVER;
+        }
+        /* C2: St = sqrt(3) |n| / (s L), compared squared */
+        double s = 0.5 * (sqrt(la2) + sqrt(lb2) + R->lab[r]);
+        double den = s * s * L2;
+        double st2 = 3.0 * n2 / den;
+        if (S->phase == 1 && S->st_on && st2 < S->minst2) return FEMLOD_REJECT_STRETCH;
+        double st = sqrt(st2);
+        if (st > 1.0) st = 1.0;
+        stsum += st;
+        if (st < stmin) stmin = st;
+    }
+    if (S->phase == 0 && !(stmin > R->st_removed)) return FEMLOD_REJECT_STRETCH;
+    double stavg = R->n ? stsum / (double)R->n : 1.0;
+    if (!R->n) stmin = 1.0;
+    /* 4.2.3: rho = Sz_DIF * St_MIN * St_AVE (tau_SZ is a common factor) */
+    *rho = R->szdif * stmin * stavg;
+    return NO_REASON;
+}
+
+/* The other feature edge at v (v on one line), as its far vertex. */
+static uint32_t line_neighbour(const simp *S, uint32_t v, uint32_t e) {
+    const uint32_t *fl = S->refs + S->fstart[v];
+    for (uint32_t m = 0; m < S->fcount[v]; m++) {
+        const uint32_t *te = S->tedge + 3 * (size_t)fl[m];
+        for (int c = 0; c < 3; c++) {
+            uint32_t ed = te[c];
+            if (ed == e || !(S->eflag[ed] & E_FEATURE)) continue;
+            uint32_t a = S->ev[2 * (size_t)ed], b = S->ev[2 * (size_t)ed + 1];
+            if (a == v) return b;
+            if (b == v) return a;
+        }
+    }
+    return UINT32_MAX;
+}
+
+/* A collapse along a feature line (method-notes "Optimal position": a
+ * vertex on one feature line may only move along it). The endpoints lie on
+ * the line exactly; the midpoint only where the line is straight (the
+ * neighbouring feature edges continue the edge within about 1 degree):
+ * elsewhere it would cut the corner of a curved line, and repeated
+ * collapses would shrink it. Returns the best priority. */
+static double evaluate_line(simp *S, ring *R) {
+    const double *pi = P(S, R->i), *pj = P(S, R->j);
+    uint32_t oi = line_neighbour(S, R->i, R->e), oj = line_neighbour(S, R->j, R->e);
+    int straight = 0;
+    if (oi != UINT32_MAX && oj != UINT32_MAX) {
+        double u[3], a[3], b[3];
+        sub3(u, pj, pi);
+        sub3(a, pi, P(S, oi));
+        sub3(b, P(S, oj), pj);
+        double uu = dot3(u, u), ua = dot3(u, a), ub = dot3(u, b);
+        const double cl = cos(FEMLOD_SIMPLIFY_LINE_TURN * PI / 180.0), c2 = cl * cl;
+        straight = ua > 0 && ub > 0 && ua * ua >= c2 * uu * dot3(a, a) && ub * ub >= c2 * uu * dot3(b, b);
+    }
+    int n = 0;
+    if (straight) {
+        for (int k = 0; k < 3; k++) R->cand[n][k] = 0.5 * (pi[k] + pj[k]);
+        n++;
+    }
+    memcpy(R->cand[n++], pi, 3 * sizeof *pi);
+    memcpy(R->cand[n++], pj, 3 * sizeof *pj);
+    R->ncand = n;
+    double best = -1.0;
+    int bi = -1, w = NO_REASON, alltol = 1;
+    for (int c = 0; c < n; c++) {
+        w = eval_candidate(S, R, R->cand[c], &R->rho[c]);
+        R->ok[c] = w == NO_REASON;
+        alltol &= w == FEMLOD_REJECT_TOLERANCE;
+        if (R->ok[c] && R->rho[c] > best) { /* ties keep the earlier: midpoint, then i */
+            best = R->rho[c];
+            bi = c;
+        }
+    }
+    if (bi > 0) { /* best first */
+        double t[3], tr = R->rho[0];
+        int to = R->ok[0];
+        memcpy(t, R->cand[0], sizeof t);
+        memcpy(R->cand[0], R->cand[bi], sizeof t);
+        memcpy(R->cand[bi], t, sizeof t);
+        R->rho[0] = R->rho[bi];
+        R->rho[bi] = tr;
+        R->ok[0] = R->ok[bi];
+        R->ok[bi] = to;
+    }
+    if (best < 0.0) {
+        S->rejected[w]++;
+        R->reason = w;
+        R->tolfail = alltol;
+    }
+    return best;
+}
+
+/* Full cheap evaluation: returns the best priority (< 0 when no candidate is
+ * valid) and leaves the candidates in R, best first among valid ones. */
+static double evaluate(simp *S, ring *R, uint32_t e) {
+    dbg_evals++;
+    R->ncand = 0;
+    R->tolfail = 0;
+    int why = gather(S, R, e);
+    if (why != NO_REASON) {
+        S->rejected[why]++;
+        R->reason = why;
+        return -1.0;
+    }
+    const double *pi = P(S, R->i), *pj = P(S, R->j);
+    double best = -1.0;
+    if (R->mode == M_KEEP_I || R->mode == M_KEEP_J) {
+        const double *p = R->mode == M_KEEP_I ? pi : pj;
+        memcpy(R->cand[0], p, sizeof R->cand[0]);
+        R->ncand = 1;
+        int w = eval_candidate(S, R, p, &R->rho[0]);
+        R->ok[0] = w == NO_REASON;
+        if (R->ok[0]) best = R->rho[0];
+        else {
+            R->tolfail = w == FEMLOD_REJECT_TOLERANCE;
+            S->rejected[w]++;
+            R->reason = w;
+        }
+        return best;
+    }
+    if (R->mode == M_LINE) return evaluate_line(S, R);
+    double mid[3];
+    for (int k = 0; k < 3; k++) mid[k] = 0.5 * (pi[k] + pj[k]);
+    memcpy(R->cand[0], mid, sizeof mid);
+    int w0 = eval_candidate(S, R, mid, &R->rho[0]);
+    R->ok[0] = w0 == NO_REASON;
+    R->ncand = 1;
+    int w1 = NO_REASON;
+    if (FEMLOD_SIMPLIFY_USE_OPTIMUM && (R->ok[0] || S->opt_when_mid_fails)) {
+        double opt[3];
+        int kept = fl_quadric_optimum2(S->q + R->i, S->q + R->j, mid, FEMLOD_SIMPLIFY_EIGEN_REL, opt);
+        /* an optimum farther than the edge length from the midpoint is the
+         * sign of a near-singular system, not a better position */
+        if (kept > 0 && dist2(opt, mid) <= dist2(pi, pj) && dist2(opt, mid) > 0.0) {
+            memcpy(R->cand[1], opt, sizeof opt);
+            w1 = eval_candidate(S, R, opt, &R->rho[1]);
+            R->ok[1] = w1 == NO_REASON;
+            R->ncand = 2;
+        }
+    }
+    if (R->ok[0]) best = R->rho[0];
+    if (R->ncand == 2 && R->ok[1] && R->rho[1] > best) {
+        /* the optimum is strictly better: put it first (ties keep the midpoint) */
+        double t[3];
+        memcpy(t, R->cand[0], sizeof t);
+        memcpy(R->cand[0], R->cand[1], sizeof t);
+        memcpy(R->cand[1], t, sizeof t);
+        double tr = R->rho[0];
+        R->rho[0] = R->rho[1];
+        R->rho[1] = tr;
+        int to = R->ok[0];
+        R->ok[0] = R->ok[1];
+        R->ok[1] = to;
+        best = R->rho[0];
+    }
+    if (best < 0.0) {
+        int w = R->ncand == 2 ? w1 : w0;
+        if (w0 == FEMLOD_REJECT_TOLERANCE && (R->ncand == 1 || w1 == FEMLOD_REJECT_TOLERANCE))
+            R->tolfail = 1;
+        S->rejected[w]++;
+        R->reason = w;
+    }
+    return best;
+}
+
+/* }====== */
+
+/* {====== expensive checks, run when an edge is popped */
+
+static int cone_check(simp *S, ring *R, const double p[3]) {
+    if (!buf_reserve((void **)&S->newcone, &S->newcone_cap, 4 * R->n, sizeof(float))) {
+        S->oom = 1;
+        return FEMLOD_REJECT_FOLDOVER;
+    }
+    /* twice the per-collapse limit: the drift bound (docs/simplify.md) */
+    double lim = mn(2.0 * S->max_nc, 180.0) * PI / 180.0;
+    for (size_t r = 0; r < R->n; r++) {
+        const double *a = P(S, R->a[r]), *b = P(S, R->b[r]);
+        double ea[3], eb[3], n[3];
+        sub3(ea, a, p);
+        sub3(eb, b, p);
+        cross3(n, ea, eb);
+        double l = sqrt(dot3(n, n));
+        for (int k = 0; k < 3; k++) n[k] /= l;
+        /* the cone holds the input normals the face stands for; the new
+         * normal must stay within max_normal_change of all of them */
+        float *c = S->newcone + 4 * r;
+        memcpy(c, S->cone + 4 * (size_t)R->face[r], 4 * sizeof(float));
+        /* a removed face's area goes to the new faces at its opposite
+         * vertex (merging it into every new face, as PMP does, would mix
+         * the two sides of every feature line collapsed along) */
+        for (size_t s = 0; s < R->ns; s++) {
+            if (R->a[r] != R->sopp[s] && R->b[r] != R->sopp[s]) continue;
+            const float *o = S->cone + 4 * (size_t)R->sface[s];
+            double on[3] = {o[0], o[1], o[2]};
+            cone_merge(c, on, o[3]);
+        }
+        double ca = n[0] * c[0] + n[1] * c[1] + n[2] * c[2];
+        ca = ca > 1.0 ? 1.0 : (ca < -1.0 ? -1.0 : ca);
+        if (acos(ca) + c[3] > lim) return FEMLOD_REJECT_FOLDOVER;
+    }
+    return NO_REASON;
+}
+
+static int deviation_check(simp *S, ring *R, const double p[3], size_t *np) {
+    size_t n = 0;
+    /* the removed input vertices held by the changed faces, and i, j
+     * themselves when they are input vertices */
+    for (int side = 0; side < 2; side++) {
+        uint32_t v = side ? R->j : R->i;
+        const uint32_t *fl = S->refs + S->fstart[v];
+        for (uint32_t m = 0; m < S->fcount[v]; m++) {
+            uint32_t f = fl[m];
+            if (side == 1) { /* shared faces were listed from i */
+                const uint32_t *t = S->tri + 3 * (size_t)f;
+                if (t[0] == R->i || t[1] == R->i || t[2] == R->i) continue;
+            }
+            for (uint32_t x = S->fpt[f]; x != UINT32_MAX; x = S->pnext[x]) {
+                if (!buf_reserve((void **)&S->pbuf, &S->pbuf_cap, n + 1, sizeof *S->pbuf)) {
+                    S->oom = 1;
+                    return FEMLOD_REJECT_DEVIATION;
+                }
+                S->pbuf[n++] = x;
+            }
+        }
+    }
+    for (int side = 0; side < 2; side++) {
+        uint32_t v = side ? R->j : R->i;
+        if (S->node[v] < S->nv) {
+            if (!buf_reserve((void **)&S->pbuf, &S->pbuf_cap, n + 1, sizeof *S->pbuf)) {
+                S->oom = 1;
+                return FEMLOD_REJECT_DEVIATION;
+            }
+            S->pbuf[n++] = S->node[v];
+        }
+    }
+    if (!buf_reserve((void **)&S->pdst, &S->pdst_cap, n, sizeof *S->pdst)) {
+        S->oom = 1;
+        return FEMLOD_REJECT_DEVIATION;
+    }
+    *np = n;
+    if (R->n == 0) return n ? FEMLOD_REJECT_DEVIATION : NO_REASON;
+    for (size_t m = 0; m < n; m++) {
+        const double *x = S->pos0 + 3 * (size_t)S->pbuf[m];
+        double best = __builtin_inf();
+        uint32_t bi = 0;
+        for (size_t r = 0; r < R->n; r++) {
+            double d = fl_point_tri_dist2(x, p, P(S, R->a[r]), P(S, R->b[r]));
+            if (d < best) {
+                best = d;
+                bi = (uint32_t)r;
+            }
+        }
+        if (best > S->maxdev2) return FEMLOD_REJECT_DEVIATION;
+        S->pdst[m] = bi;
+    }
+    return NO_REASON;
+}
+
+#define K_ID (UINT32_MAX - 1) /* the id of the new vertex in intersection tests */
+
+/* No new triangle may cross another triangle of the mesh (issue 3): each new
+ * triangle is tested against the triangles whose grid cells its box
+ * overlaps, the triangles being replaced excepted, and against the other new
+ * triangles. Shared corners and edges are told to the test by vertex id. */
+static int intersect_check(simp *S, ring *R, const double p[3]) {
+    if (!buf_reserve((void **)&S->tbox, &S->tbox_cap, 6 * R->n + 6, sizeof *S->tbox)) {
+        S->oom = 1;
+        return FEMLOD_REJECT_INTERSECTION;
+    }
+    /* boxes of the new triangles and of the whole new fan */
+    double lo[3], hi[3];
+    for (int k = 0; k < 3; k++) lo[k] = hi[k] = p[k];
+    for (size_t r = 0; r < R->n; r++) {
+        const double *a = P(S, R->a[r]), *b = P(S, R->b[r]);
+        double *bx = S->tbox + 6 * r;
+        for (int k = 0; k < 3; k++) {
+            bx[k] = mn(p[k], mn(a[k], b[k])) - S->eps;
+            bx[3 + k] = mx(p[k], mx(a[k], b[k])) + S->eps;
+            lo[k] = mn(lo[k], bx[k]);
+            hi[k] = mx(hi[k], bx[3 + k]);
+        }
+    }
+    uint32_t ex = next_fstamp(S);
+    for (int side = 0; side < 2; side++) {
+        uint32_t v = side ? R->j : R->i;
+        const uint32_t *fl = S->refs + S->fstart[v];
+        for (uint32_t m = 0; m < S->fcount[v]; m++) S->fmark[fl[m]] = ex;
+    }
+    /* one pass over the cells under the fan; each triangle met once */
+    int c0[3], c1[3];
+    fl_grid_range(&S->grid, lo, hi, c0, c1);
+    for (int z = c0[2]; z <= c1[2]; z++)
+        for (int y = c0[1]; y <= c1[1]; y++)
+            for (int x = c0[0]; x <= c1[0]; x++) {
+                size_t cell = fl_grid_cell(&S->grid, x, y, z);
+                dbg_cells++;
+                uint32_t cnt = S->grid.count[cell];
+                uint32_t blk = S->grid.head[cell];
+                uint32_t lim = cnt ? (cnt - 1) % FL_GRID_BLOCK + 1 : 0;
+                while (blk != UINT32_MAX) {
+                    const fl_grid_block *B = S->grid.blocks + blk;
+                    for (uint32_t s = 0; s < lim; s++) {
+                        uint32_t f = B->item[s];
+                        dbg_items++;
+                        if (S->fmark[f] == ex) continue; /* being replaced, or met */
+                        S->fmark[f] = ex;
+                        const uint32_t *t = S->tri + 3 * (size_t)f;
+                        const double *Q[3] = {P(S, t[0]), P(S, t[1]), P(S, t[2])};
+                        double qb[6];
+                        for (int k = 0; k < 3; k++) {
+                            qb[k] = mn(Q[0][k], mn(Q[1][k], Q[2][k]));
+                            qb[3 + k] = mx(Q[0][k], mx(Q[1][k], Q[2][k]));
+                        }
+                        if (qb[0] > hi[0] || qb[1] > hi[1] || qb[2] > hi[2] || qb[3] < lo[0] ||
+                            qb[4] < lo[1] || qb[5] < lo[2])
+                            continue;
+                        for (size_t r = 0; r < R->n; r++) {
+                            const double *bx = S->tbox + 6 * r;
+                            if (qb[0] > bx[3] || qb[1] > bx[4] || qb[2] > bx[5] || qb[3] < bx[0] ||
+                                qb[4] < bx[1] || qb[5] < bx[2])
+                                continue;
+                            const double *T[3] = {p, P(S, R->a[r]), P(S, R->b[r])};
+                            uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
+                            dbg_tt++;
+                            if (fl_tri_tri_intersect(T, tid, Q, t, S->eps)) return FEMLOD_REJECT_INTERSECTION;
+                        }
+                    }
+                    blk = B->next;
+                    lim = FL_GRID_BLOCK;
+                }
+            }
+    /* the new triangles among themselves: they all share k */
+    for (size_t r = 0; r < R->n; r++) {
+        const double *T[3] = {p, P(S, R->a[r]), P(S, R->b[r])};
+        uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
+        const double *br = S->tbox + 6 * r;
+        for (size_t s2 = r + 1; s2 < R->n; s2++) {
+            const double *bs = S->tbox + 6 * s2;
+            if (br[0] > bs[3] || br[1] > bs[4] || br[2] > bs[5] || br[3] < bs[0] || br[4] < bs[1] ||
+                br[5] < bs[2])
+                continue;
+            const double *Q[3] = {p, P(S, R->a[s2]), P(S, R->b[s2])};
+            uint32_t qid[3] = {K_ID, R->a[s2], R->b[s2]};
+            dbg_tt++;
+            if (fl_tri_tri_intersect(T, tid, Q, qid, S->eps)) return FEMLOD_REJECT_INTERSECTION;
+        }
+    }
+    return NO_REASON;
+}
+
+/* Candidate c passes the checks that are too costly for every evaluation. */
+static int expensive_checks(simp *S, ring *R, int c) {
+    const double *p = R->cand[c];
+    int w;
+    if (S->cone_on && !FL_NO_CONE && (w = cone_check(S, R, p)) != NO_REASON) return w;
+    if (S->dev_on && (w = deviation_check(S, R, p, &S->npts)) != NO_REASON) return w;
+    return intersect_check(S, R, p);
+}
+
+/* }====== */
+
+/* {====== collapse (4.2 step 4) and the log (5.1) */
+
+static int cmp_u32(const void *a, const void *b) {
+    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+static uint8_t local_ref(const simp *S, const ring *R, size_t nvs, uint32_t v) {
+    if (v == R->i) return 0;
+    if (v == R->j) return 1;
+    uint32_t id = S->node[v];
+    size_t lo = 0, hi = nvs;
+    while (lo < hi) {
+        size_t mid = (lo + hi) / 2;
+        if (S->vstars[mid] < id) lo = mid + 1;
+        else hi = mid;
+    }
+    return (uint8_t)(2 + lo);
+}
+
+static int log_collapse(simp *S, ring *R, const double p[3]) {
+    uint32_t mk = next_stamp(S);
+    size_t nvs = 0;
+    for (size_t r = 0; r < R->n; r++) {
+        uint32_t ab[2] = {R->a[r], R->b[r]};
+        for (int q = 0; q < 2; q++)
+            if (S->vmark[ab[q]] != mk) {
+                S->vmark[ab[q]] = mk;
+                S->vstars[nvs++] = S->node[ab[q]];
+            }
+    }
+    for (size_t s = 0; s < R->ns; s++)
+        if (S->vmark[R->sopp[s]] != mk) {
+            S->vmark[R->sopp[s]] = mk;
+            S->vstars[nvs++] = S->node[R->sopp[s]];
+        }
+    qsort(S->vstars, nvs, sizeof *S->vstars, cmp_u32);
+    double es = 0.0;
+    /* e_size: mean distance from k to its vstars (paper 5.1) */
+    mk = next_stamp(S);
+    size_t cnt = 0;
+    for (size_t r = 0; r < R->n; r++) {
+        uint32_t ab[2] = {R->a[r], R->b[r]};
+        for (int q = 0; q < 2; q++)
+            if (S->vmark[ab[q]] != mk) {
+                S->vmark[ab[q]] = mk;
+                es += sqrt(dist2(p, P(S, ab[q])));
+                cnt++;
+            }
+    }
+    for (size_t s = 0; s < R->ns; s++)
+        if (S->vmark[R->sopp[s]] != mk) {
+            S->vmark[R->sopp[s]] = mk;
+            es += sqrt(dist2(p, P(S, R->sopp[s])));
+            cnt++;
+        }
+    es = cnt ? es / (double)cnt : 0.0;
+    size_t nf = R->ns + R->n;
+    if (nf > sizeof S->lfaces / 3) return 0;
+    size_t w = 0;
+    for (size_t s = 0; s < R->ns; s++) {
+        const uint32_t *t = S->tri + 3 * (size_t)R->sface[s];
+        for (int c = 0; c < 3; c++) S->lfaces[w++] = local_ref(S, R, nvs, t[c]);
+    }
+    for (size_t r = 0; r < R->n; r++) {
+        const uint32_t *t = S->tri + 3 * (size_t)R->face[r];
+        for (int c = 0; c < 3; c++) S->lfaces[w++] = local_ref(S, R, nvs, t[c]);
+    }
+    return fl_log_add(S->log, S->node[R->i], S->node[R->j], p, es, S->vstars, nvs, S->lfaces, nf);
+}
+
+static int grid_add_face(simp *S, uint32_t f) {
+    double lo[3], hi[3];
+    face_bbox(S, f, lo, hi);
+    return fl_grid_insert(&S->grid, f, lo, hi);
+}
+
+static void grid_remove_face(simp *S, uint32_t f) {
+    double lo[3], hi[3];
+    face_bbox(S, f, lo, hi);
+    fl_grid_remove(&S->grid, f, lo, hi);
+}
+
+static uint32_t side_edge(const simp *S, uint32_t f, uint32_t u, uint32_t v) {
+    const uint32_t *t = S->tri + 3 * (size_t)f;
+    for (int c = 0; c < 3; c++) {
+        uint32_t x = t[c], y = t[(c + 1) % 3];
+        if ((x == u && y == v) || (x == v && y == u)) return S->tedge[3 * (size_t)f + c];
+    }
+    return UINT32_MAX;
+}
+
+static void list_remove(simp *S, uint32_t v, uint32_t f) {
+    uint32_t *fl = S->refs + S->fstart[v];
+    uint32_t n = S->fcount[v];
+    for (uint32_t m = 0; m < n; m++)
+        if (fl[m] == f) {
+            /* keep the order: it decides the order of sums, and results must
+             * not depend on which face went first */
+            memmove(fl + m, fl + m + 1, (n - m - 1) * sizeof *fl);
+            S->fcount[v] = n - 1;
+            return;
+        }
+}
+
+static int compact_refs(simp *S) {
+    size_t total = 0;
+    for (size_t v = 0; v < S->nv; v++) total += S->fcount[v];
+    /* room for as many appended lists again: compaction stays amortised O(1) */
+    size_t cap = 2 * total + 1024;
+    uint32_t *nr = fl_alloc(cap, sizeof *nr);
+    if (!nr) return 0;
+    size_t w = 0;
+    for (size_t v = 0; v < S->nv; v++) {
+        memcpy(nr + w, S->refs + S->fstart[v], S->fcount[v] * sizeof *nr);
+        S->fstart[v] = (uint32_t)w;
+        w += S->fcount[v];
+    }
+    free(S->refs);
+    S->refs = nr;
+    S->nrefs = w;
+    S->caprefs = cap;
+    return 1;
+}
+
+static int build_grid(simp *S, double h) {
+    double lo[3] = {__builtin_inf(), __builtin_inf(), __builtin_inf()};
+    double hi[3] = {-__builtin_inf(), -__builtin_inf(), -__builtin_inf()};
+    for (size_t v = 0; v < S->nv; v++) {
+        if (S->vflag[v] & V_DEAD || S->fcount[v] == 0) continue;
+        for (int k = 0; k < 3; k++) {
+            lo[k] = mn(lo[k], S->pos[3 * v + k]);
+            hi[k] = mx(hi[k], S->pos[3 * v + k]);
+        }
+    }
+    if (!(lo[0] <= hi[0])) {
+        for (int k = 0; k < 3; k++) lo[k] = hi[k] = 0.0;
+    }
+    fl_grid_free(&S->grid);
+    if (!fl_grid_init(&S->grid, lo, hi, h, 2 * S->live + 4096)) return 0;
+    S->grid_h = S->grid.h;
+    S->grid_live = S->live;
+    for (size_t f = 0; f < S->nt; f++)
+        if (face_alive(S, (uint32_t)f) && !grid_add_face(S, (uint32_t)f)) return 0;
+    return 1;
+}
+
+static int collapse(simp *S, ring *R, int c) {
+    const double *pc = R->cand[c];
+    double p[3] = {pc[0], pc[1], pc[2]};
+    uint32_t i = R->i, j = R->j, e = R->e;
+    int efeat = (S->eflag[e] & E_FEATURE) != 0;
+    if (S->log && !log_collapse(S, R, p)) return 0;
+
+    /* out of the grid while the old positions hold */
+    for (size_t s = 0; s < R->ns; s++) grid_remove_face(S, R->sface[s]);
+    for (size_t r = 0; r < R->n; r++) grid_remove_face(S, R->face[r]);
+
+    if (S->dev_on) {
+        for (size_t s = 0; s < R->ns; s++) S->fpt[R->sface[s]] = UINT32_MAX;
+        for (size_t r = 0; r < R->n; r++) S->fpt[R->face[r]] = UINT32_MAX;
+        for (size_t m = 0; m < S->npts; m++) {
+            uint32_t x = S->pbuf[m], f = R->face[S->pdst[m]];
+            S->pnext[x] = S->fpt[f];
+            S->fpt[f] = x;
+        }
+    }
+
+    /* edges: (i,j) goes; (j,x) merges into (i,x) at each removed face */
+    fl_heap_remove(&S->heap, e);
+    S->eflag[e] = E_DEAD;
+    for (size_t s = 0; s < R->ns; s++) {
+        uint32_t F = R->sface[s], x = R->sopp[s];
+        uint32_t eix = side_edge(S, F, i, x), ejx = side_edge(S, F, j, x);
+        for (size_t r = 0; r < R->n; r++) {
+            if (!R->from_j[r]) continue;
+            uint32_t *te = S->tedge + 3 * (size_t)R->face[r];
+            for (int k = 0; k < 3; k++)
+                if (te[k] == ejx) te[k] = eix;
+        }
+        S->enf[eix] = (uint16_t)(S->enf[eix] + S->enf[ejx] - 2);
+        S->eflag[eix] |= S->eflag[ejx] & E_FEATURE;
+        S->eflag[ejx] = E_DEAD;
+        fl_heap_remove(&S->heap, ejx);
+        list_remove(S, x, F);
+        S->val[x]--;
+        uint32_t *t = S->tri + 3 * (size_t)F;
+        t[0] = t[1] = t[2] = UINT32_MAX;
+        S->live--;
+    }
+    /* j's faces and edges now belong to i's slot */
+    for (size_t r = 0; r < R->n; r++) {
+        if (!R->from_j[r]) continue;
+        uint32_t f = R->face[r];
+        uint32_t *t = S->tri + 3 * (size_t)f;
+        for (int k = 0; k < 3; k++) {
+            if (t[k] == j) t[k] = i;
+            uint32_t ed = S->tedge[3 * (size_t)f + k];
+            if (S->ev[2 * (size_t)ed] == j) S->ev[2 * (size_t)ed] = i;
+            if (S->ev[2 * (size_t)ed + 1] == j) S->ev[2 * (size_t)ed + 1] = i;
+        }
+    }
+    /* the new vertex's face list, appended */
+    if (S->nrefs + R->n > S->caprefs) {
+        if (!compact_refs(S)) return 0;
+        if (S->nrefs + R->n > S->caprefs) {
+            size_t cap = S->caprefs * 2 + R->n;
+            uint32_t *nr = fl_realloc(S->refs, cap, sizeof *nr);
+            if (!nr) return 0;
+            S->refs = nr;
+            S->caprefs = cap;
+        }
+    }
+    memcpy(S->refs + S->nrefs, R->face, R->n * sizeof *R->face);
+    S->fstart[i] = (uint32_t)S->nrefs;
+    S->fcount[i] = (uint32_t)R->n;
+    S->nrefs += R->n;
+    S->fcount[j] = 0;
+
+    uint8_t fi = S->vflag[i], fj = S->vflag[j];
+    S->vflag[i] = (uint8_t)((fi | fj) & (V_FIXED | V_BOUNDARY));
+    S->vflag[j] = V_DEAD;
+    /* k keeps the feature edges of both, the collapsed one excepted */
+    S->fdeg[i] = (uint8_t)(S->fdeg[i] + S->fdeg[j] - (efeat ? 2 : 0));
+    fl_quadric_add(S->q + i, S->q + j);
+    memcpy(S->pos + 3 * (size_t)i, p, sizeof p);
+    S->val[i] = (uint32_t)R->newval;
+    S->node[i] = (uint32_t)(S->nv + S->collapses);
+
+    for (size_t r = 0; r < R->n; r++) {
+        uint32_t f = R->face[r];
+        face_update_cache(S, f);
+        if (S->cone_on && !FL_NO_CONE) memcpy(S->cone + 4 * (size_t)f, S->newcone + 4 * r, 4 * sizeof(float));
+        if (!grid_add_face(S, f)) return 0;
+    }
+    S->collapses++;
+    if (S->phase == 0) S->prephase++;
+    if (S->live * 4 < S->grid_live && S->live > 64) {
+        if (!build_grid(S, S->grid_h * 2.0)) return 0;
+    }
+    return 1;
+}
+
+/* }====== */
+
+/* {====== (re-)evaluation */
+
+static int face_is_bad(const simp *S, uint32_t f) {
+    const uint32_t *t = S->tri + 3 * (size_t)f;
+    return tri_stretch(P(S, t[0]), P(S, t[1]), P(S, t[2]), NULL) < S->minst;
+}
+
+static void update_edge(simp *S, uint32_t ed, int eligible) {
+    if (S->eflag[ed] & E_DEAD) return;
+    if (!eligible) {
+        fl_heap_remove(&S->heap, ed);
+        return;
+    }
+    double rho = evaluate(S, &S->R, ed);
+    S->eflag[ed] = (uint8_t)((S->eflag[ed] & ~E_TOLFAIL) | (S->R.tolfail ? E_TOLFAIL : 0));
+    if (rho >= 0.0) fl_heap_set(&S->heap, ed, rho);
+    else fl_heap_remove(&S->heap, ed);
+}
+
+/* After a collapse into slot k, every edge at k or at a vertex of its ring
+ * (method-notes: their collapses would create triangles containing k). */
+static int reevaluate_ring(simp *S, uint32_t k) {
+    uint32_t vm = next_stamp(S);
+    size_t ne = 0;
+    const uint32_t *fk = S->refs + S->fstart[k];
+    uint32_t nk = S->fcount[k];
+    /* ring vertices first listed, k itself included */
+    S->vmark[k] = vm;
+    for (uint32_t m = 0; m <= nk; m++) {
+        /* m == nk: k itself; else the corners of k's faces */
+        uint32_t verts[3];
+        int nvv;
+        if (m == nk) {
+            verts[0] = k;
+            nvv = 1;
+        } else {
+            const uint32_t *t = S->tri + 3 * (size_t)fk[m];
+            nvv = 0;
+            for (int c = 0; c < 3; c++)
+                if (t[c] != k && S->vmark[t[c]] != vm) {
+                    S->vmark[t[c]] = vm;
+                    verts[nvv++] = t[c];
+                }
+        }
+        for (int q = 0; q < nvv; q++) {
+            uint32_t v = verts[q];
+            const uint32_t *fl = S->refs + S->fstart[v];
+            for (uint32_t a = 0; a < S->fcount[v]; a++) {
+                uint32_t f = fl[a];
+                const uint32_t *t = S->tri + 3 * (size_t)f;
+                int bad = S->phase == 0 && face_is_bad(S, f);
+                for (int c = 0; c < 3; c++) {
+                    if (t[c] != v && t[(c + 1) % 3] != v) continue;
+                    uint32_t ed = S->tedge[3 * (size_t)f + c];
+                    if (S->emark[ed] != vm) {
+                        S->emark[ed] = vm;
+                        if (!buf_reserve((void **)&S->ebuf, &S->ebuf_cap, 2 * (ne + 1), sizeof *S->ebuf))
+                            return 0;
+                        S->ebuf[2 * ne] = ed;
+                        S->ebuf[2 * ne + 1] = (uint32_t)bad;
+                        ne++;
+                    } else if (bad) {
+                        for (size_t x = ne; x-- > 0;)
+                            if (S->ebuf[2 * x] == ed) {
+                                S->ebuf[2 * x + 1] = 1;
+                                break;
+                            }
+                    }
+                }
+            }
+        }
+    }
+    for (size_t x = 0; x < ne; x++) {
+        uint32_t ed = S->ebuf[2 * x];
+        if (S->phase == 1 && S->ev[2 * (size_t)ed] != k && S->ev[2 * (size_t)ed + 1] != k) {
+            /* An edge away from k keeps its endpoints, hence its candidates
+             * and their quadric errors: one that failed C1 alone still does. */
+            if (S->eflag[ed] & E_TOLFAIL) continue;
+            /* Lazy: a queued edge keeps its (stale) key and is re-evaluated
+             * when popped, put back if its priority fell. */
+            if (FEMLOD_SIMPLIFY_LAZY && fl_heap_contains(&S->heap, ed)) continue;
+        }
+        update_edge(S, ed, S->phase == 1 || S->ebuf[2 * x + 1]);
+    }
+    return 1;
+}
+
+/* Evaluates every live edge (phase 1 start and the final retry), or in the
+ * pre-phase every edge of a triangle below min_stretch. Returns how many
+ * entered the queue. */
+static size_t evaluate_all(simp *S) {
+    size_t n = 0;
+    for (size_t ed = 0; ed < S->ne; ed++) {
+        if (S->eflag[ed] & E_DEAD) continue;
+        if (fl_heap_contains(&S->heap, (uint32_t)ed)) continue;
+        int eligible = 1;
+        if (S->phase == 0) {
+            eligible = 0;
+            uint32_t v = S->ev[2 * ed];
+            const uint32_t *fl = S->refs + S->fstart[v];
+            for (uint32_t a = 0; a < S->fcount[v] && !eligible; a++) {
+                const uint32_t *te = S->tedge + 3 * (size_t)fl[a];
+                if ((te[0] == ed || te[1] == ed || te[2] == ed) && face_is_bad(S, fl[a])) eligible = 1;
+            }
+        }
+        if (!eligible) continue;
+        update_edge(S, (uint32_t)ed, 1);
+        n += fl_heap_contains(&S->heap, (uint32_t)ed);
+    }
+    return n;
+}
+
+/* }====== */
+
+/* {====== setup: defaults, connectivity, features, quadrics */
+
+typedef struct erec {
+    uint32_t other, face, side;
+} erec;
+
+static int erec_less(const erec *x, const erec *y) {
+    if (x->other != y->other) return x->other < y->other;
+    if (x->face != y->face) return x->face < y->face;
+    return x->side < y->side;
+}
+
+static void simp_free(simp *S) {
+    free(S->slot_of);
+    free(S->pos);
+    free(S->q);
+    free(S->node);
+    free(S->fstart);
+    free(S->fcount);
+    free(S->val);
+    free(S->vflag);
+    free(S->fdeg);
+    free(S->vmark);
+    free(S->refs);
+    free(S->tri);
+    free(S->tedge);
+    free(S->fn);
+    free(S->fsz);
+    free(S->cone);
+    free(S->fmark);
+    free(S->fpt);
+    free(S->pnext);
+    free(S->ev);
+    free(S->enf);
+    free(S->eflag);
+    free(S->emark);
+    fl_heap_free(&S->heap);
+    fl_grid_free(&S->grid);
+    free(S->R.face);
+    free(S->R.a);
+    free(S->R.b);
+    free(S->R.from_j);
+    free(S->R.lab);
+    free(S->R.lab2);
+    free(S->ebuf);
+    free(S->pbuf);
+    free(S->pdst);
+    free(S->newcone);
+    free(S->tbox);
+}
+
+static int bad_number(double x) { return isnan(x) || isinf(x); }
+
+/* Resolves the options (zero: default, negative: off). */
+static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, size_t nt, double diag,
+                                     double mean_edge, double size_max, femlod_error *err) {
+    if (bad_number(o->ratio) || bad_number(o->tolerance) || bad_number(o->max_deviation) ||
+        bad_number(o->min_stretch) || bad_number(o->max_size) || bad_number(o->feature_angle) ||
+        bad_number(o->feature_weight) || bad_number(o->max_normal_change))
+        return fl_error(err, FEMLOD_EINPUT, "simplify: options must be finite numbers");
+    if (o->target && o->ratio != 0.0)
+        return fl_error(err, FEMLOD_EINPUT, "simplify: give target or ratio, not both");
+    if (o->ratio < 0.0 || o->ratio > 1.0)
+        return fl_error(err, FEMLOD_EINPUT, "simplify: ratio %g is outside (0, 1]", o->ratio);
+    if (o->min_stretch > 1.0)
+        return fl_error(err, FEMLOD_EINPUT, "simplify: min_stretch %g is above 1", o->min_stretch);
+    if (o->max_valence > 0 && o->max_valence < 3)
+        return fl_error(err, FEMLOD_EINPUT, "simplify: max_valence %d is below 3", o->max_valence);
+    if (o->feature_angle > 180.0 || o->max_normal_change > 180.0)
+        return fl_error(err, FEMLOD_EINPUT, "simplify: angles are degrees in [0, 180]");
+    S->target = o->target;
+    if (o->ratio > 0.0) S->target = (size_t)floor(o->ratio * (double)nt + 0.5);
+
+    /* C1: the default is scale-aware: docs/simplify.md "Defaults" */
+    S->tol_on = o->tolerance >= 0.0;
+    S->tol = o->tolerance > 0.0 ? o->tolerance : FEMLOD_SIMPLIFY_DEFAULT_TOLERANCE * mean_edge * mean_edge;
+    S->dev_on = o->max_deviation > 0.0;
+    S->maxdev = o->max_deviation;
+    S->maxdev2 = S->maxdev * S->maxdev;
+    S->st_on = o->min_stretch >= 0.0;
+    S->minst = o->min_stretch > 0.0 ? o->min_stretch : 0.2;
+    if (!S->st_on) S->minst = 0.0;
+    S->minst2 = S->minst * S->minst;
+    S->sz_on = o->max_size >= 0.0;
+    S->maxsz = o->max_size > 0.0 ? o->max_size : mx(0.1 * diag, 2.0 * size_max);
+    S->maxsz2 = S->maxsz * S->maxsz;
+    S->val_on = o->max_valence >= 0;
+    S->maxval = o->max_valence > 0 ? o->max_valence : 12;
+    S->feat_angle = o->feature_angle > 0.0 ? o->feature_angle : (o->feature_angle < 0.0 ? -1.0 : 40.0);
+    S->feat_w = o->feature_weight > 0.0 ? o->feature_weight : (o->feature_weight < 0.0 ? 0.0 : 2.0);
+    S->cone_on = o->max_normal_change >= 0.0;
+    S->max_nc = o->max_normal_change > 0.0 ? o->max_normal_change : 60.0;
+    if (S->cone_on) {
+        S->cos_nc = cos(S->max_nc * PI / 180.0);
+        S->cos_nc2 = S->cos_nc * S->cos_nc;
+    } else {
+        S->cos_nc = 0.0; /* flips only */
+        S->cos_nc2 = 0.0;
+    }
+    S->keep_boundary = o->keep_boundary != 0;
+    S->area_w = o->area_weighted != 0;
+    (void)mean_edge;
+    return FEMLOD_OK;
+}
+
+static uint64_t spread21(uint32_t x) {
+    uint64_t v = x & 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffull;
+    v = (v | v << 16) & 0x1f0000ff0000ffull;
+    v = (v | v << 8) & 0x100f00f00f00f00full;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+    v = (v | v << 2) & 0x1249249249249249ull;
+    return v;
+}
+
+typedef struct mkey {
+    uint64_t key;
+    uint32_t id;
+} mkey;
+
+static int cmp_mkey(const void *a, const void *b) {
+    const mkey *x = a, *y = b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return (x->id > y->id) - (x->id < y->id);
+}
+
+/* perm[s] = the input vertex of slot s, sorted by (Morton code, index);
+ * returns the inverse (input -> slot), NULL on ENOMEM. */
+static uint32_t *morton_slots(const double *pos, size_t nv, uint32_t *perm) {
+    mkey *k = fl_alloc(nv, sizeof *k);
+    uint32_t *inv = fl_alloc(nv, sizeof *inv);
+    if (!k || !inv) {
+        free(k);
+        free(inv);
+        return NULL;
+    }
+    double lo[3] = {__builtin_inf(), __builtin_inf(), __builtin_inf()}, hi[3];
+    for (int c = 0; c < 3; c++) hi[c] = -lo[c];
+    for (size_t v = 0; v < nv; v++)
+        for (int c = 0; c < 3; c++) {
+            lo[c] = mn(lo[c], pos[3 * v + c]);
+            hi[c] = mx(hi[c], pos[3 * v + c]);
+        }
+    double ext = mx(hi[0] - lo[0], mx(hi[1] - lo[1], hi[2] - lo[2]));
+    double sc = ext > 0.0 ? 2097151.0 / ext : 0.0;
+    for (size_t v = 0; v < nv; v++) {
+        uint64_t code = 0;
+        for (int c = 0; c < 3; c++) code |= spread21((uint32_t)((pos[3 * v + c] - lo[c]) * sc)) << c;
+        k[v].key = code;
+        k[v].id = (uint32_t)v;
+    }
+    qsort(k, nv, sizeof *k, cmp_mkey);
+    for (size_t s = 0; s < nv; s++) {
+        perm[s] = k[s].id;
+        inv[k[s].id] = (uint32_t)s;
+    }
+    free(k);
+    return inv;
+}
+
+static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simplify_options *o,
+                           size_t *dropped, femlod_error *err) {
+    size_t nv = mesh->nv, nt_in = mesh->nt;
+    const uint32_t *tin = mesh->tri;
+    S->nv = nv;
+    S->pos0 = mesh->pos;
+    size_t nt = 0;
+    for (size_t f = 0; f < nt_in; f++) {
+        const uint32_t *t = tin + 3 * f;
+        if (t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) nt++;
+    }
+    *dropped = nt_in - nt;
+    S->nt = nt;
+    S->live = nt;
+#define ALLOC(p, n) (((p) = fl_alloc((n), sizeof *(p))) != NULL)
+#define CALLOC(p, n) (((p) = fl_calloc((n), sizeof *(p))) != NULL)
+    if (!ALLOC(S->pos, 3 * nv) || !CALLOC(S->q, nv) || !ALLOC(S->node, nv) || !ALLOC(S->fstart, nv + 1) ||
+        !CALLOC(S->fcount, nv) || !CALLOC(S->val, nv) || !CALLOC(S->vflag, nv) || !CALLOC(S->fdeg, nv) ||
+        !CALLOC(S->vmark, nv) || !ALLOC(S->tri, 3 * nt) || !ALLOC(S->tedge, 3 * nt) ||
+        !ALLOC(S->fn, 3 * nt) || !ALLOC(S->fsz, nt) || !CALLOC(S->fmark, nt))
+        return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory (%zu triangles)", nt_in);
+    /* Vertex slots in Morton order of position: the neighbours of a vertex
+     * then sit near it in memory, which halves the time on large meshes
+     * (docs/simplify.md). Node ids stay the input indices. */
+    uint32_t *slot_of = morton_slots(mesh->pos, nv, S->node);
+    S->slot_of = slot_of;
+    if (!slot_of) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    for (size_t s = 0; s < nv; s++) memcpy(S->pos + 3 * s, mesh->pos + 3 * (size_t)S->node[s], 3 * sizeof(double));
+    nt = 0;
+    for (size_t f = 0; f < nt_in; f++) {
+        const uint32_t *t = tin + 3 * f;
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+        for (int c = 0; c < 3; c++) {
+            S->tri[3 * nt + c] = slot_of[t[c]];
+            S->fcount[slot_of[t[c]]]++;
+        }
+        nt++;
+    }
+    /* vertex -> faces, in increasing face order */
+    size_t acc = 0;
+    for (size_t v = 0; v < nv; v++) {
+        S->fstart[v] = (uint32_t)acc;
+        acc += S->fcount[v];
+    }
+    S->fstart[nv] = (uint32_t)acc;
+    S->caprefs = acc + acc / 2 + 1024;
+    if (!ALLOC(S->refs, S->caprefs)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    S->nrefs = acc;
+    memset(S->fcount, 0, nv * sizeof *S->fcount);
+    for (size_t f = 0; f < nt; f++)
+        for (int c = 0; c < 3; c++) {
+            uint32_t v = S->tri[3 * f + c];
+            S->refs[S->fstart[v] + S->fcount[v]++] = (uint32_t)f;
+        }
+    for (size_t f = 0; f < nt; f++) face_update_cache(S, (uint32_t)f);
+
+    /* edges, numbered in increasing (a, b) order: each vertex a lists its
+     * sides towards larger neighbours b */
+    size_t cap_e = 3 * nt + 16; /* E <= 3F; trimmed below */
+    if (!ALLOC(S->ev, 2 * cap_e) || !ALLOC(S->enf, cap_e))
+        return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    erec *rec = NULL;
+    uint32_t *nb = NULL;
+    size_t cap_rec = 0, cap_nb = 0, ne = 0;
+    double elen = 0.0;
+    for (size_t a = 0; a < nv; a++) {
+        size_t nrec = 0, nnb = 0;
+        const uint32_t *fl = S->refs + S->fstart[a];
+        uint32_t cnt = S->fcount[a];
+        if (!buf_reserve((void **)&rec, &cap_rec, 2 * (size_t)cnt + 1, sizeof *rec) ||
+            !buf_reserve((void **)&nb, &cap_nb, 2 * (size_t)cnt + 1, sizeof *nb)) {
+            free(rec);
+            free(nb);
+            return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+        }
+        for (uint32_t m = 0; m < cnt; m++) {
+            uint32_t f = fl[m];
+            const uint32_t *t = S->tri + 3 * (size_t)f;
+            int c = t[0] == a ? 0 : (t[1] == a ? 1 : 2);
+            int sides[2] = {c, (c + 2) % 3};
+            uint32_t others[2] = {t[(c + 1) % 3], t[(c + 2) % 3]};
+            for (int q = 0; q < 2; q++) {
+                nb[nnb++] = others[q];
+                if (others[q] > a) {
+                    erec r = {others[q], f, (uint32_t)sides[q]};
+                    size_t x = nrec++;
+                    while (x > 0 && erec_less(&r, &rec[x - 1])) {
+                        rec[x] = rec[x - 1];
+                        x--;
+                    }
+                    rec[x] = r;
+                }
+            }
+        }
+        qsort(nb, nnb, sizeof *nb, cmp_u32);
+        uint32_t val = 0;
+        for (size_t x = 0; x < nnb; x++)
+            if (x == 0 || nb[x] != nb[x - 1]) val++;
+        S->val[a] = val;
+        for (size_t x = 0; x < nrec;) {
+            size_t y = x;
+            while (y < nrec && rec[y].other == rec[x].other) y++;
+            if (ne == cap_e) { /* cannot happen for 3 sides per face; kept for safety */
+                free(rec);
+                free(nb);
+                return fl_error(err, FEMLOD_ENOMEM, "simplify: edge table overflow");
+            }
+            S->ev[2 * ne] = (uint32_t)a;
+            S->ev[2 * ne + 1] = rec[x].other;
+            S->enf[ne] = (uint16_t)(y - x > 65535 ? 65535 : y - x);
+            for (size_t z = x; z < y; z++) S->tedge[3 * (size_t)rec[z].face + rec[z].side] = (uint32_t)ne;
+            elen += sqrt(dist2(P(S, (uint32_t)a), P(S, rec[x].other)));
+            ne++;
+            x = y;
+        }
+    }
+    free(rec);
+    free(nb);
+    S->ne = ne;
+    uint32_t *ev2 = fl_realloc(S->ev, 2 * ne + 2, sizeof *ev2);
+    if (ev2) S->ev = ev2;
+    uint16_t *enf2 = fl_realloc(S->enf, ne + 1, sizeof *enf2);
+    if (enf2) S->enf = enf2;
+    if (!CALLOC(S->eflag, ne + 1) || !CALLOC(S->emark, ne + 1))
+        return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+
+    double lo[3], hi[3];
+    femlod_mesh_bbox(mesh, lo, hi);
+    double diag = sqrt(dist2(lo, hi));
+    double mean_edge = ne ? elen / (double)ne : 0.0;
+    double size_max = 0.0;
+    for (size_t f = 0; f < nt; f++) size_max = mx(size_max, (double)S->fsz[f]);
+    femlod_status st = resolve_options(S, o, nt_in, diag, mean_edge, size_max, err);
+    if (st != FEMLOD_OK) return st;
+    S->eps = 1e-10 * (diag > 0 ? diag : 1.0);
+
+    /* boundary and non-manifold edges */
+    for (size_t e = 0; e < ne; e++) {
+        uint32_t a = S->ev[2 * e], b = S->ev[2 * e + 1];
+        if (S->enf[e] == 1) {
+            S->vflag[a] |= V_BOUNDARY;
+            S->vflag[b] |= V_BOUNDARY;
+        } else if (S->enf[e] > 2) {
+            S->vflag[a] |= V_NONMANIFOLD;
+            S->vflag[b] |= V_NONMANIFOLD;
+        }
+    }
+    /* pinched vertices: more than one fan of faces around them */
+    for (size_t v = 0; v < nv; v++) {
+        uint32_t cnt = S->fcount[v];
+        if (cnt == 0 || (S->vflag[v] & V_NONMANIFOLD)) continue;
+        const uint32_t *fl = S->refs + S->fstart[v];
+        uint32_t mk = next_stamp(S);
+        /* flood the fan from the first face through edges at v */
+        uint32_t reached = 1, changed = 1;
+        S->fmark[fl[0]] = mk;
+        while (changed) {
+            changed = 0;
+            for (uint32_t m = 0; m < cnt; m++) {
+                if (S->fmark[fl[m]] == mk) continue;
+                const uint32_t *te = S->tedge + 3 * (size_t)fl[m];
+                for (uint32_t w = 0; w < cnt && S->fmark[fl[m]] != mk; w++) {
+                    if (S->fmark[fl[w]] != mk) continue;
+                    const uint32_t *tw = S->tedge + 3 * (size_t)fl[w];
+                    for (int x = 0; x < 3; x++)
+                        for (int y = 0; y < 3; y++)
+                            if (te[x] == tw[y] && (S->ev[2 * (size_t)te[x]] == v || S->ev[2 * (size_t)te[x] + 1] == v)) {
+                                S->fmark[fl[m]] = mk;
+                                x = y = 3;
+                            }
+                }
+                if (S->fmark[fl[m]] == mk) {
+                    reached++;
+                    changed = 1;
+                }
+            }
+        }
+        if (reached != cnt) S->vflag[v] |= V_NONMANIFOLD;
+    }
+    memset(S->fmark, 0, nt * sizeof *S->fmark);
+    S->stamp = 0;
+    memset(S->vmark, 0, nv * sizeof *S->vmark);
+
+    /* quadrics (4.1 (2)-(4)): face planes, optionally area-weighted and
+     * renormalised per vertex (method-notes) so that tolerance keeps units */
+    double *area = NULL;
+    if (S->area_w && !CALLOC(area, nv)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    for (size_t f = 0; f < nt; f++) {
+        const uint32_t *t = S->tri + 3 * f;
+        double n[3] = {S->fn[3 * f], S->fn[3 * f + 1], S->fn[3 * f + 2]};
+        /* the float cache is for checks; the quadric gets the exact normal */
+        double e1[3], e2[3], nn[3];
+        sub3(e1, P(S, t[1]), P(S, t[0]));
+        sub3(e2, P(S, t[2]), P(S, t[0]));
+        cross3(nn, e1, e2);
+        double l = sqrt(dot3(nn, nn));
+        if (!(l > 0.0)) continue;
+        for (int k = 0; k < 3; k++) n[k] = nn[k] / l;
+        double w = S->area_w ? 0.5 * l : 1.0;
+        for (int c = 0; c < 3; c++) {
+            fl_quadric_add_plane(S->q + t[c], n, P(S, t[0]), w);
+            if (area) area[t[c]] += w;
+        }
+    }
+    if (area) {
+        for (size_t v = 0; v < nv; v++)
+            if (area[v] > 0.0) fl_quadric_scale(S->q + v, (double)S->fcount[v] / area[v]);
+        free(area);
+    }
+    /* features and line quadrics, weighted by sharpness */
+    double cos_feat = S->feat_angle > 0.0 ? cos(S->feat_angle * PI / 180.0) : -2.0;
+    for (size_t e = 0; e < ne; e++) {
+        uint32_t a = S->ev[2 * e], b = S->ev[2 * e + 1];
+        double sharp = 0.0;
+        if (S->enf[e] != 2) {
+            sharp = 1.0;
+        } else if (S->feat_angle > 0.0) {
+            /* the two faces: scan a's list */
+            const uint32_t *fl = S->refs + S->fstart[a];
+            uint32_t f2[2], n2 = 0;
+            for (uint32_t m = 0; m < S->fcount[a] && n2 < 2; m++) {
+                const uint32_t *te = S->tedge + 3 * (size_t)fl[m];
+                if (te[0] == e || te[1] == e || te[2] == e) f2[n2++] = fl[m];
+            }
+            if (n2 == 2) {
+                const float *x = S->fn + 3 * (size_t)f2[0], *y = S->fn + 3 * (size_t)f2[1];
+                double c = (double)x[0] * y[0] + (double)x[1] * y[1] + (double)x[2] * y[2];
+                if (c < cos_feat) sharp = 0.5 * (1.0 - c);
+            }
+        }
+        if (sharp > 0.0) {
+            S->eflag[e] |= E_FEATURE;
+            if (S->fdeg[a] < 255) S->fdeg[a]++;
+            if (S->fdeg[b] < 255) S->fdeg[b]++;
+            if (S->feat_w > 0.0) {
+                double u[3];
+                sub3(u, P(S, b), P(S, a));
+                double l = sqrt(dot3(u, u));
+                if (l > 0.0) {
+                    for (int k = 0; k < 3; k++) u[k] /= l;
+                    fl_quadric_add_line(S->q + a, u, P(S, a), S->feat_w * sharp);
+                    fl_quadric_add_line(S->q + b, u, P(S, a), S->feat_w * sharp);
+                }
+            }
+        }
+    }
+    /* vertices that never move */
+    for (size_t v = 0; v < nv; v++) {
+        if (S->fdeg[v] == 1 || S->fdeg[v] >= 3) S->vflag[v] |= V_FIXED;
+        if (S->keep_boundary && (S->vflag[v] & V_BOUNDARY)) S->vflag[v] |= V_FIXED;
+        if (S->vflag[v] & V_NONMANIFOLD) S->vflag[v] |= V_FIXED;
+    }
+    for (size_t m = 0; m < o->lock_count; m++) {
+        if (o->lock[m] >= nv) {
+            return fl_error(err, FEMLOD_EINPUT, "simplify: lock[%zu] = %u is out of range (%zu vertices)", m,
+                            (unsigned)o->lock[m], nv);
+        }
+        S->vflag[slot_of[o->lock[m]]] |= V_FIXED;
+    }
+    if (o->lock_fn)
+        for (size_t v = 0; v < nv; v++) {
+            const double *p = mesh->pos + 3 * v;
+            if (o->lock_fn(o->lock_payload, p[0], p[1], p[2])) S->vflag[slot_of[v]] |= V_FIXED;
+        }
+    free(S->slot_of);
+    S->slot_of = NULL;
+
+    if (S->cone_on) {
+        if (!ALLOC(S->cone, 4 * nt)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+        for (size_t f = 0; f < nt; f++) {
+            memcpy(S->cone + 4 * f, S->fn + 3 * f, 3 * sizeof(float));
+            S->cone[4 * f + 3] = 0.0f;
+        }
+    }
+    if (S->dev_on) {
+        if (!ALLOC(S->fpt, nt) || !ALLOC(S->pnext, nv))
+            return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+        memset(S->fpt, 0xff, nt * sizeof *S->fpt);
+        memset(S->pnext, 0xff, nv * sizeof *S->pnext);
+    }
+    if (!fl_heap_init(&S->heap, ne + 1)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    if (!build_grid(S, mean_edge > 0.0 ? FEMLOD_SIMPLIFY_GRID_CELL * mean_edge : 1.0))
+        return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+#undef ALLOC
+#undef CALLOC
+    return FEMLOD_OK;
+}
+
+/* }====== */
+
+/* {====== driver */
+
+static int progress(simp *S, const femlod_simplify_options *o, size_t live0, size_t *next) {
+    if (!o->progress) return 0;
+    if (S->collapses < *next) return 0;
+    size_t goal = live0 > S->target ? live0 - S->target : 1;
+    size_t done = live0 - S->live;
+    *next = S->collapses + (goal / 100 > 0 ? goal / 100 : 1);
+    double d = (double)done / (double)goal;
+    return o->progress(o->progress_payload, d > 1.0 ? 1.0 : d);
+}
+
+/* Pops edges until the target or an empty queue. Returns 0 on ENOMEM, 2
+ * when cancelled, 1 otherwise. */
+static int run_queue(simp *S, const femlod_simplify_options *o, size_t live0, size_t *next) {
+    ring *R = &S->R;
+    while (S->live > S->target) {
+        double key;
+        uint32_t e = fl_heap_pop(&S->heap, &key);
+        if (e == UINT32_MAX) break;
+        dbg_pops++;
+        double rho = evaluate(S, R, e);
+        if (S->oom) return 0;
+        if (rho < 0.0) continue;
+        if (rho < fl_heap_top_key(&S->heap)) { /* stale key: back in line */
+            fl_heap_set(&S->heap, e, rho);
+            continue;
+        }
+        int chosen = -1;
+        for (int c = 0; c < R->ncand && chosen < 0; c++) {
+            if (!R->ok[c]) continue;
+            dbg_exp++;
+            int w = expensive_checks(S, R, c);
+            if (S->oom) return 0;
+            if (w == NO_REASON) chosen = c;
+            else S->rejected[w]++;
+        }
+        if (chosen < 0) continue; /* back when its neighbourhood changes */
+        if (R->rho[chosen] < fl_heap_top_key(&S->heap)) {
+            fl_heap_set(&S->heap, e, R->rho[chosen]);
+            continue;
+        }
+        uint32_t k = R->i;
+        if (!collapse(S, R, chosen)) return 0;
+        if (!reevaluate_ring(S, k) || S->oom) return 0;
+        if (progress(S, o, live0, next)) return 2;
+    }
+    return 1;
+}
+
+static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_reason *why) {
+    size_t live0 = S->live, next = 0;
+    *why = FEMLOD_STOP_NO_VALID_EDGE;
+    /* pre-phase (4.2.2): only edges of triangles below min_stretch */
+    if (S->st_on) {
+        S->phase = 0;
+        if (evaluate_all(S)) {
+            int r = run_queue(S, o, live0, &next);
+            if (r != 1) {
+                if (r == 2) *why = FEMLOD_STOP_CANCELLED;
+                return r;
+            }
+        }
+        while (fl_heap_size(&S->heap)) fl_heap_pop(&S->heap, NULL);
+    }
+    S->phase = 1;
+    size_t last_retry = (size_t)-1;
+    for (;;) {
+        if (S->live <= S->target) break;
+        /* evaluate everything not queued: at the start, and again when the
+         * queue runs dry, for edges refused for reasons outside their ring
+         * (an intersection with a triangle that has moved away since) */
+        if (last_retry == S->collapses) break;
+        last_retry = S->collapses;
+        dbg_retry++;
+        if (!evaluate_all(S)) break;
+        if (S->oom) return 0;
+        int r = run_queue(S, o, live0, &next);
+        if (r != 1) {
+            if (r == 2) *why = FEMLOD_STOP_CANCELLED;
+            return r;
+        }
+    }
+    if (S->live <= S->target) *why = FEMLOD_STOP_TARGET;
+    return 1;
+}
+
+static femlod_status make_output(simp *S, femlod_mesh **out, femlod_collapse_log *log) {
+    uint32_t *map = fl_alloc(S->nv, sizeof *map);
+    if (!map) return FEMLOD_ENOMEM;
+    /* output vertices in increasing node id: surviving input vertices in
+     * input order, then the new ones in collapse order */
+    mkey *order = fl_alloc(S->nv, sizeof *order);
+    if (!order) {
+        free(map);
+        return FEMLOD_ENOMEM;
+    }
+    size_t nv = 0;
+    for (size_t v = 0; v < S->nv; v++) {
+        map[v] = UINT32_MAX;
+        if (!(S->vflag[v] & V_DEAD) && S->fcount[v] > 0) {
+            order[nv].key = S->node[v];
+            order[nv].id = (uint32_t)v;
+            nv++;
+        }
+    }
+    qsort(order, nv, sizeof *order, cmp_mkey);
+    for (size_t x = 0; x < nv; x++) map[order[x].id] = (uint32_t)x;
+    free(order);
+    femlod_mesh *m = fl_mesh_alloc(nv, S->live);
+    if (!m) {
+        free(map);
+        return FEMLOD_ENOMEM;
+    }
+    for (size_t v = 0; v < S->nv; v++)
+        if (map[v] != UINT32_MAX) memcpy(m->pos + 3 * (size_t)map[v], S->pos + 3 * v, 3 * sizeof(double));
+    size_t w = 0;
+    for (size_t f = 0; f < S->nt; f++) {
+        if (!face_alive(S, (uint32_t)f)) continue;
+        for (int c = 0; c < 3; c++) m->tri[3 * w + c] = map[S->tri[3 * f + c]];
+        w++;
+    }
+    if (log) {
+        log->out_nodes = fl_alloc(nv, sizeof *log->out_nodes);
+        if (!log->out_nodes) {
+            free(map);
+            femlod_mesh_free(m);
+            return FEMLOD_ENOMEM;
+        }
+        for (size_t v = 0; v < S->nv; v++)
+            if (map[v] != UINT32_MAX) log->out_nodes[map[v]] = S->node[v];
+        log->nv_out = nv;
+    }
+    free(map);
+    *out = m;
+    return FEMLOD_OK;
+}
+
+const char *femlod_stop_reason_name(femlod_stop_reason reason) {
+    switch (reason) {
+    case FEMLOD_STOP_TARGET: return "target";
+    case FEMLOD_STOP_NO_VALID_EDGE: return "no_valid_edge";
+    case FEMLOD_STOP_CANCELLED: return "cancelled";
+    }
+    return "unknown";
+}
+
+const char *femlod_reject_name(femlod_reject reason) {
+    static const char *const names[FEMLOD_REJECT_COUNT] = {
+        "tolerance", "deviation", "stretch", "size", "valence", "foldover", "topology", "intersection"};
+    return (unsigned)reason < FEMLOD_REJECT_COUNT ? names[reason] : "unknown";
+}
+
+static double now_seconds(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, const femlod_mesh *mesh,
+                              const femlod_simplify_options *options, femlod_simplify_result *result,
+                              femlod_error *err) {
+    if (!out || !mesh) return fl_error(err, FEMLOD_EINPUT, "simplify: NULL argument");
+    double t0 = now_seconds();
+    femlod_simplify_options defaults = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    const femlod_simplify_options *o = options ? options : &defaults;
+    simp *S = calloc(1, sizeof *S);
+    if (!S) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    S->szdif_ring = FEMLOD_SIMPLIFY_SZDIF_RING;
+    S->opt_when_mid_fails = FEMLOD_SIMPLIFY_OPT_WHEN_MID_FAILS;
+    size_t dropped = 0;
+    femlod_status st = setup(S, mesh, o, &dropped, err);
+    if (st != FEMLOD_OK) {
+        simp_free(S);
+        free(S);
+        return st;
+    }
+    if (out_log) {
+        S->log = fl_log_new(mesh->nv, S->nt / 2 + 16);
+        if (!S->log) {
+            simp_free(S);
+            free(S);
+            return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+        }
+    }
+    femlod_stop_reason why = FEMLOD_STOP_NO_VALID_EDGE;
+    int r = simplify_run(S, o, &why);
+    femlod_mesh *m = NULL;
+    if (r == 0 || make_output(S, &m, S->log) != FEMLOD_OK) {
+        femlod_collapse_log_free(S->log);
+        simp_free(S);
+        free(S);
+        return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    }
+    if (S->log) S->log->prephase = S->prephase;
+    if (getenv("FL_DEBUG"))
+        fprintf(stderr, "evals %zu pops %zu expensive %zu retries %zu collapses %zu ne %zu cells %zu items %zu tt %zu\n", dbg_evals, dbg_pops,
+                dbg_exp, dbg_retry, S->collapses, S->ne, dbg_cells, dbg_items, dbg_tt);
+    if (result) {
+        memset(result, 0, sizeof *result);
+        result->triangles = m->nt;
+        result->vertices = m->nv;
+        result->stop_reason = why;
+        result->collapses = S->collapses;
+        result->prephase_collapses = S->prephase;
+        memcpy(result->rejected, S->rejected, sizeof result->rejected);
+        size_t bad = 0;
+        for (size_t f = 0; f < m->nt; f++) {
+            const uint32_t *t = m->tri + 3 * f;
+            double sz;
+            double stv = tri_stretch(m->pos + 3 * (size_t)t[0], m->pos + 3 * (size_t)t[1], m->pos + 3 * (size_t)t[2], &sz);
+            if ((S->st_on && stv < S->minst) || (S->sz_on && sz > S->maxsz)) bad++;
+        }
+        result->violating_input = bad;
+        result->dropped_degenerate = dropped;
+        result->target = S->target;
+        result->tolerance = S->tol_on ? S->tol : FEMLOD_SIMPLIFY_OFF;
+        result->max_deviation = S->dev_on ? S->maxdev : FEMLOD_SIMPLIFY_OFF;
+        result->min_stretch = S->st_on ? S->minst : FEMLOD_SIMPLIFY_OFF;
+        result->max_size = S->sz_on ? S->maxsz : FEMLOD_SIMPLIFY_OFF;
+        result->feature_angle = S->feat_angle > 0.0 ? S->feat_angle : FEMLOD_SIMPLIFY_OFF;
+        result->feature_weight = S->feat_w > 0.0 ? S->feat_w : FEMLOD_SIMPLIFY_OFF;
+        result->max_normal_change = S->cone_on ? S->max_nc : FEMLOD_SIMPLIFY_OFF;
+        result->max_valence = S->val_on ? S->maxval : -1;
+        result->seconds = now_seconds() - t0;
+    }
+    *out = m;
+    if (out_log) *out_log = S->log;
+    simp_free(S);
+    free(S);
+    return FEMLOD_OK;
+}
+
+/* }====== */

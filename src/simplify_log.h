@@ -1,0 +1,33 @@
+/*
+ * simplify_log.h - the collapse log's storage (internal; public accessors in
+ * femlod.h, invariants in docs/simplify.md "Collapse log").
+ */
+#ifndef FEMLOD_SIMPLIFY_LOG_H
+#define FEMLOD_SIMPLIFY_LOG_H
+
+#include "core.h"
+
+struct femlod_collapse_log {
+    size_t nv_in;        /* input vertices: node ids 0..nv_in-1 */
+    size_t n, cap;       /* collapses; collapse c made node nv_in + c */
+    size_t prephase;     /* the first `prephase` collapses were the stretch pre-phase */
+    uint32_t *pair;      /* 2n */
+    double *pos;         /* 3n */
+    double *e_size;      /* n */
+    uint32_t *vstar_start; /* n+1 */
+    uint32_t *vstars;    /* vstar_start[n], increasing node id per collapse */
+    size_t cap_vstars;
+    uint32_t *face_start; /* n+1, in faces (3 refs each) */
+    uint8_t *faces;      /* 3 * face_start[n] local refs */
+    size_t cap_faces;
+    uint32_t *out_nodes; /* node id of each output vertex */
+    size_t nv_out;
+};
+
+FL_INTERNAL femlod_collapse_log *fl_log_new(size_t nv_in, size_t expected);
+/* Appends a collapse; 0 on ENOMEM. faces: nfaces triples of local refs. */
+FL_INTERNAL int fl_log_add(femlod_collapse_log *log, uint32_t i, uint32_t j, const double pos[3],
+                           double e_size, const uint32_t *vstars, size_t nvstars, const uint8_t *faces,
+                           size_t nfaces);
+
+#endif

@@ -1,0 +1,142 @@
+/* bench_simplify.c - femlod_simplify against meshopt_simplify (issue 3,
+ * item 6): cover.obj subdivided twice (about 1.25M triangles) reduced to
+ * 50,000 and 12,000 triangles by both, in one run. Prints the median time
+ * of RUNS runs of each, the ratio, peak memory (getrusage) and memory per
+ * input triangle, and both outputs' stretch min/avg and size max.
+ *
+ * Usage: bench_simplify [mesh.obj [levels [runs]]]   (defaults: the shared
+ * cover.obj, 2 levels, 3 runs). femlod runs with the paper's thresholds
+ * for the cover, (0.15, 0.2, 15, 12), and its defaults for the rest;
+ * meshoptimizer with no error limit (it checks no element quality).
+ * Timing never influences a result: the simplified meshes are the same
+ * on every run, which the benchmark checks. */
+#include "femlod.h"
+
+#include <meshoptimizer.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <time.h>
+
+#ifndef FEMLOD_SHARED_DATA
+#define FEMLOD_SHARED_DATA "../shared/data"
+#endif
+
+static double now(void) {
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+static double peak_mb(void) {
+    struct rusage u;
+    getrusage(RUSAGE_SELF, &u);
+    return (double)u.ru_maxrss / 1024.0; /* Linux: kilobytes */
+}
+
+static int cmp_double(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+static double median(double *t, int n) {
+    qsort(t, (size_t)n, sizeof *t, cmp_double);
+    return n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
+}
+
+#define MAXRUNS 15
+
+int main(int argc, char **argv) {
+    const char *path = argc > 1 ? argv[1] : FEMLOD_SHARED_DATA "/cover.obj";
+    unsigned levels = argc > 2 ? (unsigned)atoi(argv[2]) : 2;
+    int runs = argc > 3 ? atoi(argv[3]) : 3;
+    if (runs < 1) runs = 1;
+    if (runs > MAXRUNS) runs = MAXRUNS;
+    femlod_error err;
+    femlod_mesh *base = NULL, *m = NULL;
+    if (femlod_mesh_read(&base, path, NULL, &err) != FEMLOD_OK ||
+        femlod_mesh_subdivide(&m, base, levels, &err) != FEMLOD_OK) {
+        fprintf(stderr, "bench_simplify: %s\n", err.message);
+        return 1;
+    }
+    femlod_mesh_free(base);
+    size_t nv = femlod_mesh_vertex_count(m), nt = femlod_mesh_triangle_count(m);
+    const double *pos = femlod_mesh_positions(m);
+    const uint32_t *tri = femlod_mesh_triangles(m);
+    double mem0 = peak_mb();
+    printf("input: %s subdivided %u times: %zu triangles, %zu vertices (peak %.0f MB after loading)\n", path,
+           levels, nt, nv, mem0);
+
+    /* meshoptimizer wants float positions and unsigned indices */
+    float *fpos = malloc(3 * nv * sizeof *fpos);
+    unsigned *idx = malloc(3 * nt * sizeof *idx), *dst = malloc(3 * nt * sizeof *dst);
+    if (!fpos || !idx || !dst) return 1;
+    for (size_t i = 0; i < 3 * nv; i++) fpos[i] = (float)pos[i];
+    for (size_t i = 0; i < 3 * nt; i++) idx[i] = tri[i];
+
+    const size_t targets[2] = {50000, 12000};
+    for (int k = 0; k < 2; k++) {
+        double tf[MAXRUNS], tm[MAXRUNS];
+        femlod_mesh *out = NULL;
+        femlod_simplify_result res;
+        int same = 1;
+        for (int r = 0; r < runs; r++) {
+            femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+            o.target = targets[k];
+            o.tolerance = 0.15;
+            o.min_stretch = 0.2;
+            o.max_size = 15.0;
+            o.max_valence = 12;
+            femlod_mesh *x = NULL;
+            double t0 = now();
+            if (femlod_simplify(&x, NULL, m, &o, &res, &err) != FEMLOD_OK) {
+                fprintf(stderr, "bench_simplify: %s\n", err.message);
+                return 1;
+            }
+            tf[r] = now() - t0;
+            if (out) {
+                same &= femlod_mesh_triangle_count(x) == femlod_mesh_triangle_count(out) &&
+                        memcmp(femlod_mesh_positions(x), femlod_mesh_positions(out),
+                               3 * femlod_mesh_vertex_count(x) * sizeof(double)) == 0;
+                femlod_mesh_free(x);
+            } else {
+                out = x;
+            }
+        }
+        double memf = peak_mb();
+        size_t mo_n = 0;
+        float mo_err = 0;
+        for (int r = 0; r < runs; r++) {
+            double t0 = now();
+            mo_n = meshopt_simplify(dst, idx, 3 * nt, fpos, nv, 3 * sizeof(float), 3 * targets[k], 1e30f, 0,
+                                    &mo_err);
+            tm[r] = now() - t0;
+        }
+        femlod_mesh *mo = NULL;
+        femlod_mesh_create(&mo, pos, nv, dst, mo_n / 3, NULL);
+        femlod_quality qf, qm;
+        femlod_mesh_quality(out, &qf, NULL);
+        femlod_mesh_quality(mo, &qm, NULL);
+        double a = median(tf, runs), b = median(tm, runs);
+        printf("\ntarget %zu (median of %d runs)\n", targets[k], runs);
+        printf("  femlod        %7zu triangles (%s)  %8.3f s  stretch min %.3f avg %.3f  size max %.2f  "
+               "valence max %u  closed %d  repeatable %s\n",
+               femlod_mesh_triangle_count(out), femlod_stop_reason_name(res.stop_reason), a, qf.stretch_min,
+               qf.stretch_avg, qf.size_max, (unsigned)qf.valence_max, qf.topology.closed, same ? "yes" : "NO");
+        printf("  meshoptimizer %7zu triangles            %8.3f s  stretch min %.3f avg %.3f  size max %.2f  "
+               "valence max %u  closed %d\n",
+               mo_n / 3, b, qm.stretch_min, qm.stretch_avg, qm.size_max, (unsigned)qm.valence_max,
+               qm.topology.closed);
+        printf("  ratio femlod / meshoptimizer: %.1fx\n", b > 0 ? a / b : 0.0);
+        printf("  femlod peak memory %.0f MB, %.0f bytes per input triangle above the loaded input\n", memf,
+               (memf - mem0) * 1048576.0 / (double)nt);
+        femlod_mesh_free(out);
+        femlod_mesh_free(mo);
+    }
+    free(fpos);
+    free(idx);
+    free(dst);
+    femlod_mesh_free(m);
+    return 0;
+}

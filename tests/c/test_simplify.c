@@ -1,0 +1,859 @@
+/* test_simplify.c - quality-controlled simplification (paper section 4,
+ * method-notes.md, issue 3): facts measured on the output, never golden
+ * files. Every run is checked for the thresholds it was given (stretch,
+ * size, valence), closed and manifold output, no folded or flipped
+ * triangle, no intersecting triangle pair (a brute-force checker over a
+ * grid, independent of src/intersect.c), the count reached, and a collapse
+ * log that replays from the input to the output exactly.
+ *
+ * FEMLOD_TEST_HEAVY=0 skips the largest cases (cover.obj runs and bunny). */
+#include "check.h"
+#include "core.h"
+#include "intersect.h"
+#include "shapes.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#ifndef FEMLOD_SHARED_DATA
+#define FEMLOD_SHARED_DATA "../shared/data"
+#endif
+
+static int heavy(void) {
+    const char *h = getenv("FEMLOD_TEST_HEAVY");
+    return !(h && strcmp(h, "0") == 0);
+}
+
+static femlod_mesh *load(const char *name) {
+    char path[512];
+    snprintf(path, sizeof path, "%s/%s", FEMLOD_SHARED_DATA, name);
+    femlod_mesh *m = NULL;
+    femlod_error err;
+    if (femlod_mesh_read(&m, path, NULL, &err) != FEMLOD_OK) {
+        fprintf(stderr, "cannot read %s: %s\n", path, err.message);
+        CHECK(0);
+        return NULL;
+    }
+    return m;
+}
+
+/* {====== an independent intersection checker */
+
+static void vsub(double r[3], const double *a, const double *b) {
+    r[0] = a[0] - b[0]; r[1] = a[1] - b[1]; r[2] = a[2] - b[2];
+}
+static double vdot(const double *a, const double *b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+static void vcross(double r[3], const double *a, const double *b) {
+    r[0] = a[1] * b[2] - a[2] * b[1];
+    r[1] = a[2] * b[0] - a[0] * b[2];
+    r[2] = a[0] * b[1] - a[1] * b[0];
+}
+static double orient(const double *a, const double *b, const double *c, const double *d) {
+    double u[3], v[3], w[3], x[3];
+    vsub(u, a, d);
+    vsub(v, b, d);
+    vsub(w, c, d);
+    vcross(x, v, w);
+    return vdot(u, x);
+}
+
+/* Open segment (s, t) crosses the closed triangle (a, b, c) away from its
+ * plane-parallel cases: strict sign change through the plane and the
+ * crossing inside the triangle. Coplanar configurations are not reported:
+ * the checker flags only transversal crossings, the kind a volume mesher
+ * cannot accept; folded (coplanar) overlaps are caught by the fold check. */
+static int seg_crosses_tri(const double *s, const double *t, const double *a, const double *b, const double *c) {
+    double ds = orient(a, b, c, s), dt = orient(a, b, c, t);
+    if ((ds > 0 && dt > 0) || (ds < 0 && dt < 0) || (ds == 0 && dt == 0)) return 0;
+    double o1 = orient(s, t, a, b), o2 = orient(s, t, b, c), o3 = orient(s, t, c, a);
+    double scale = fabs(o1) + fabs(o2) + fabs(o3);
+    double tiny = 1e-12 * scale;
+    int pos = (o1 > tiny) + (o2 > tiny) + (o3 > tiny), neg = (o1 < -tiny) + (o2 < -tiny) + (o3 < -tiny);
+    return (pos == 3 || neg == 3) && fabs(ds - dt) > 1e-12 * (fabs(ds) + fabs(dt));
+}
+
+static int pair_intersects(const femlod_mesh *m, size_t f, size_t g) {
+    const uint32_t *a = m->tri + 3 * f, *b = m->tri + 3 * g;
+    int shared = 0, sa = -1, sb = -1;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            if (a[i] == b[j]) {
+                shared++;
+                sa = i;
+                sb = j;
+            }
+    if (shared >= 2) return 0; /* neighbours across an edge: fold check */
+    const double *A[3], *B[3];
+    for (int c = 0; c < 3; c++) {
+        A[c] = m->pos + 3 * (size_t)a[c];
+        B[c] = m->pos + 3 * (size_t)b[c];
+    }
+    if (shared == 1) {
+        return seg_crosses_tri(A[(sa + 1) % 3], A[(sa + 2) % 3], B[0], B[1], B[2]) ||
+               seg_crosses_tri(B[(sb + 1) % 3], B[(sb + 2) % 3], A[0], A[1], A[2]);
+    }
+    for (int e = 0; e < 3; e++) {
+        if (seg_crosses_tri(A[e], A[(e + 1) % 3], B[0], B[1], B[2])) return 1;
+        if (seg_crosses_tri(B[e], B[(e + 1) % 3], A[0], A[1], A[2])) return 1;
+    }
+    return 0;
+}
+
+/* Pairs of triangles that cross: every pair whose boxes overlap, found
+ * through a uniform grid of the boxes. */
+static size_t count_intersections(const femlod_mesh *m) {
+    size_t nt = m->nt;
+    if (nt == 0) return 0;
+    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300}, maxext = 0;
+    double *box = malloc(6 * nt * sizeof *box);
+    for (size_t f = 0; f < nt; f++) {
+        double *b = box + 6 * f;
+        for (int k = 0; k < 3; k++) {
+            b[k] = 1e300;
+            b[3 + k] = -1e300;
+        }
+        for (int c = 0; c < 3; c++)
+            for (int k = 0; k < 3; k++) {
+                double x = m->pos[3 * (size_t)m->tri[3 * f + c] + k];
+                b[k] = fmin(b[k], x);
+                b[3 + k] = fmax(b[3 + k], x);
+            }
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], b[k]);
+            hi[k] = fmax(hi[k], b[3 + k]);
+            maxext = fmax(maxext, b[3 + k] - b[k]);
+        }
+    }
+    /* cells of the largest box extent: each box touches at most 8 cells */
+    double h = maxext > 0 ? maxext : 1.0;
+    int n[3];
+    for (int k = 0; k < 3; k++) n[k] = (int)((hi[k] - lo[k]) / h) + 1;
+    size_t ncell = (size_t)n[0] * n[1] * n[2];
+    size_t *start = calloc(ncell + 1, sizeof *start);
+    size_t *cellof = malloc(nt * sizeof *cellof);
+    for (size_t f = 0; f < nt; f++) {
+        int c[3];
+        for (int k = 0; k < 3; k++) c[k] = (int)((box[6 * f + k] - lo[k]) / h);
+        cellof[f] = ((size_t)c[2] * n[1] + c[1]) * n[0] + c[0];
+        start[cellof[f] + 1]++;
+    }
+    for (size_t c = 0; c < ncell; c++) start[c + 1] += start[c];
+    size_t *items = malloc(nt * sizeof *items), *fill = calloc(ncell, sizeof *fill);
+    for (size_t f = 0; f < nt; f++) items[start[cellof[f]] + fill[cellof[f]]++] = f;
+    size_t hits = 0;
+    for (size_t f = 0; f < nt; f++) {
+        const double *bf = box + 6 * f;
+        int c[3];
+        for (int k = 0; k < 3; k++) c[k] = (int)((bf[k] - lo[k]) / h);
+        /* a box with its min corner in cell c reaches at most cell c+1 */
+        for (int z = c[2] - 1; z <= c[2] + 1; z++)
+            for (int y = c[1] - 1; y <= c[1] + 1; y++)
+                for (int x = c[0] - 1; x <= c[0] + 1; x++) {
+                    if (x < 0 || y < 0 || z < 0 || x >= n[0] || y >= n[1] || z >= n[2]) continue;
+                    size_t cell = ((size_t)z * n[1] + y) * n[0] + x;
+                    for (size_t q = start[cell]; q < start[cell + 1]; q++) {
+                        size_t g = items[q];
+                        if (g <= f) continue;
+                        const double *bg = box + 6 * g;
+                        if (bg[0] > bf[3] || bg[1] > bf[4] || bg[2] > bf[5] || bg[3] < bf[0] ||
+                            bg[4] < bf[1] || bg[5] < bf[2])
+                            continue;
+                        if (pair_intersects(m, f, g)) hits++;
+                    }
+                }
+    }
+    free(box);
+    free(start);
+    free(cellof);
+    free(items);
+    free(fill);
+    return hits;
+}
+
+/* }====== */
+
+/* Adjacent triangles folded flat onto each other (dihedral below 1 degree). */
+static size_t count_folds(const femlod_mesh *m) {
+    fl_adjacency adj;
+    if (fl_adjacency_build(&adj, m->tri, m->nt, m->nv, NULL) != FEMLOD_OK) return (size_t)-1;
+    size_t folds = 0;
+    for (size_t e = 0; e < adj.ne; e++) {
+        if (adj.edge_start[e + 1] - adj.edge_start[e] != 2) continue;
+        double n[2][3];
+        for (int s = 0; s < 2; s++) {
+            const uint32_t *t = m->tri + 3 * (size_t)adj.edge_tris[adj.edge_start[e] + s];
+            double u[3], v[3];
+            vsub(u, m->pos + 3 * (size_t)t[1], m->pos + 3 * (size_t)t[0]);
+            vsub(v, m->pos + 3 * (size_t)t[2], m->pos + 3 * (size_t)t[0]);
+            vcross(n[s], u, v);
+            double l = sqrt(vdot(n[s], n[s]));
+            for (int k = 0; k < 3; k++) n[s][k] /= l > 0 ? l : 1;
+        }
+        if (vdot(n[0], n[1]) < -0.99985) folds++;
+    }
+    fl_adjacency_free(&adj);
+    return folds;
+}
+
+static double signed_volume(const femlod_mesh *m) {
+    double v = 0;
+    for (size_t f = 0; f < m->nt; f++) {
+        const double *a = m->pos + 3 * (size_t)m->tri[3 * f], *b = m->pos + 3 * (size_t)m->tri[3 * f + 1],
+                     *c = m->pos + 3 * (size_t)m->tri[3 * f + 2];
+        double x[3];
+        vcross(x, b, c);
+        v += vdot(a, x) / 6.0;
+    }
+    return v;
+}
+
+/* {====== the collapse log replays from the input to the output */
+
+typedef struct fset {
+    uint64_t *k1;
+    uint32_t *k2;
+    uint8_t *used; /* 0 empty, 1 used, 2 deleted */
+    size_t cap, n;
+} fset;
+
+static void canon(uint32_t t[3]) { /* rotate the smallest first, keep orientation */
+    while (t[0] > t[1] || t[0] > t[2]) {
+        uint32_t x = t[0];
+        t[0] = t[1];
+        t[1] = t[2];
+        t[2] = x;
+    }
+}
+static size_t fhash(uint64_t a, uint32_t b, size_t cap) {
+    uint64_t h = a * 0x9E3779B97F4A7C15ull ^ (b + 0x632BE59BD9B4E019ull) * 0xBF58476D1CE4E5B9ull;
+    return (size_t)(h ^ (h >> 29)) & (cap - 1);
+}
+static int fset_find(const fset *s, const uint32_t t[3], size_t *slot) {
+    uint64_t a = (uint64_t)t[0] << 32 | t[1];
+    size_t i = fhash(a, t[2], s->cap), tomb = (size_t)-1;
+    for (;;) {
+        if (s->used[i] == 0) {
+            *slot = tomb != (size_t)-1 ? tomb : i;
+            return 0;
+        }
+        if (s->used[i] == 2) {
+            if (tomb == (size_t)-1) tomb = i;
+        } else if (s->k1[i] == a && s->k2[i] == t[2]) {
+            *slot = i;
+            return 1;
+        }
+        i = (i + 1) & (s->cap - 1);
+    }
+}
+static int fset_add(fset *s, uint32_t t[3]) {
+    canon(t);
+    size_t slot;
+    if (fset_find(s, t, &slot)) return 0; /* duplicate */
+    s->k1[slot] = (uint64_t)t[0] << 32 | t[1];
+    s->k2[slot] = t[2];
+    s->used[slot] = 1;
+    s->n++;
+    return 1;
+}
+static int fset_del(fset *s, uint32_t t[3]) {
+    canon(t);
+    size_t slot;
+    if (!fset_find(s, t, &slot)) return 0;
+    s->used[slot] = 2;
+    s->n--;
+    return 1;
+}
+
+/* Replays the log on the input's triangles: each collapse must find the
+ * triangles it says it removes and may not create one that exists. The end
+ * state must be the output's triangles (through its node ids). */
+static int log_replays(const femlod_mesh *in, const femlod_mesh *out, const femlod_collapse_log *log) {
+    fset s;
+    s.cap = 1;
+    while (s.cap < 4 * in->nt + 16) s.cap *= 2;
+    s.k1 = malloc(s.cap * sizeof *s.k1);
+    s.k2 = malloc(s.cap * sizeof *s.k2);
+    s.used = calloc(s.cap, 1);
+    s.n = 0;
+    int ok = femlod_collapse_log_input_vertices(log) == in->nv;
+    for (size_t f = 0; f < in->nt && ok; f++) {
+        uint32_t t[3] = {in->tri[3 * f], in->tri[3 * f + 1], in->tri[3 * f + 2]};
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+        ok = fset_add(&s, t);
+    }
+    size_t n = femlod_collapse_log_count(log);
+    for (size_t c = 0; c < n && ok; c++) {
+        femlod_collapse cl;
+        femlod_collapse_log_get(log, c, &cl);
+        ok = cl.k == in->nv + c && cl.i < cl.k && cl.j < cl.k && cl.e_size > 0;
+        for (size_t v = 1; v < cl.vstar_count && ok; v++) ok = cl.vstars[v - 1] < cl.vstars[v];
+        for (size_t f = 0; f < cl.face_count && ok; f++) {
+            uint32_t t[3];
+            for (int q = 0; q < 3; q++) t[q] = femlod_collapse_node(&cl, cl.faces[3 * f + q]);
+            ok = fset_del(&s, t);
+        }
+        for (size_t f = 0; f < cl.face_count && ok; f++) {
+            uint32_t t[3];
+            int has_i = 0, has_j = 0;
+            for (int q = 0; q < 3; q++) {
+                t[q] = femlod_collapse_node(&cl, cl.faces[3 * f + q]);
+                has_i |= t[q] == cl.i;
+                has_j |= t[q] == cl.j;
+                if (t[q] == cl.i || t[q] == cl.j) t[q] = cl.k;
+            }
+            if (has_i && has_j) continue;
+            ok = fset_add(&s, t);
+        }
+    }
+    size_t nvo = 0;
+    const uint32_t *nodes = femlod_collapse_log_output_nodes(log, &nvo);
+    ok = ok && nvo == out->nv && s.n == out->nt;
+    for (size_t f = 0; f < out->nt && ok; f++) {
+        uint32_t t[3];
+        for (int q = 0; q < 3; q++) t[q] = nodes[out->tri[3 * f + q]];
+        canon(t);
+        size_t slot;
+        ok = fset_find(&s, t, &slot);
+    }
+    free(s.k1);
+    free(s.k2);
+    free(s.used);
+    return ok;
+}
+
+/* }====== */
+
+/* Runs a simplification and checks every promise the result makes. */
+typedef struct run {
+    femlod_mesh *out;
+    femlod_collapse_log *log;
+    femlod_simplify_result res;
+    femlod_quality q;
+} run;
+
+static void run_free(run *r) {
+    femlod_mesh_free(r->out);
+    femlod_collapse_log_free(r->log);
+    memset(r, 0, sizeof *r);
+}
+
+static int simplify_checked(run *r, const femlod_mesh *in, const femlod_simplify_options *o, const char *label) {
+    memset(r, 0, sizeof *r);
+    femlod_error err;
+    femlod_status st = femlod_simplify(&r->out, &r->log, in, o, &r->res, &err);
+    CHECK(st == FEMLOD_OK);
+    if (st != FEMLOD_OK) {
+        fprintf(stderr, "%s: %s\n", label, err.message);
+        return 0;
+    }
+    CHECK(femlod_mesh_quality(r->out, &r->q, NULL) == FEMLOD_OK);
+    femlod_quality qi;
+    CHECK(femlod_mesh_quality(in, &qi, NULL) == FEMLOD_OK);
+    const femlod_simplify_result *s = &r->res;
+    CHECK(s->triangles == r->out->nt && s->vertices == r->out->nv);
+    /* thresholds: every triangle (the inputs used here meet them) */
+    size_t viol = 0;
+    for (size_t f = 0; f < r->out->nt; f++) {
+        const uint32_t *t = r->out->tri + 3 * f;
+        const double *a = r->out->pos + 3 * (size_t)t[0], *b = r->out->pos + 3 * (size_t)t[1],
+                     *c = r->out->pos + 3 * (size_t)t[2];
+        double st_ = femlod_triangle_stretch(a, b, c), sz = femlod_triangle_size(a, b, c);
+        if ((s->min_stretch > 0 && st_ < s->min_stretch) || (s->max_size > 0 && sz > s->max_size)) viol++;
+    }
+    CHECK(viol == s->violating_input);
+    if (qi.stretch_min >= s->min_stretch && (s->max_size < 0 || qi.size_max <= s->max_size)) CHECK(viol == 0);
+    if (s->max_valence > 0 && (int)qi.valence_max <= s->max_valence) CHECK((int)r->q.valence_max <= s->max_valence);
+    if (qi.topology.closed) CHECK(r->q.topology.closed);
+    if (qi.topology.manifold) CHECK(r->q.topology.manifold);
+    if (qi.topology.oriented) CHECK(r->q.topology.oriented);
+    CHECK(r->q.topology.nonmanifold_edges <= qi.topology.nonmanifold_edges);
+    if (qi.topology.closed && qi.topology.oriented) {
+        double vi = signed_volume(in), vo = signed_volume(r->out);
+        CHECK(vi * vo > 0);
+    }
+    size_t folds = count_folds(r->out), inter = count_intersections(r->out);
+    CHECK(folds == 0);
+    if (inter) { /* a defective input may cross itself already: no more than it did */
+        size_t inter_in = count_intersections(in);
+        printf("  input crossings %zu, output %zu\n", inter_in, inter);
+        CHECK(inter <= inter_in);
+    }
+    if (s->target && s->stop_reason == FEMLOD_STOP_TARGET) CHECK(r->out->nt <= s->target);
+    CHECK(log_replays(in, r->out, r->log));
+    printf("%-28s %7zu -> %6zu tris (%s) stretch avg %.3f min %.3f size max %.4g valence max %u "
+           "folds %zu crossings %zu %.2fs\n",
+           label, in->nt, r->out->nt, femlod_stop_reason_name(s->stop_reason), r->q.stretch_avg,
+           r->q.stretch_min, r->q.size_max, (unsigned)r->q.valence_max, folds, inter, s->seconds);
+    return 1;
+}
+
+static femlod_simplify_options paper(size_t target) {
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = target;
+    o.tolerance = 0.15;
+    o.min_stretch = 0.2;
+    o.max_size = 15.0;
+    o.max_valence = 12;
+    return o;
+}
+
+/* {====== cases */
+
+static void test_options(void) {
+    femlod_mesh *m = shape_icosphere(2);
+    femlod_mesh *out = NULL;
+    femlod_error err;
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = 10;
+    o.ratio = 0.5;
+    CHECK(femlod_simplify(&out, NULL, m, &o, NULL, &err) == FEMLOD_EINPUT);
+    CHECK_STR_HAS(err.message, "target or ratio");
+    CHECK(out == NULL);
+    o.target = 0;
+    o.ratio = 1.5;
+    CHECK(femlod_simplify(&out, NULL, m, &o, NULL, &err) == FEMLOD_EINPUT);
+    o.ratio = 0;
+    o.min_stretch = 2;
+    CHECK(femlod_simplify(&out, NULL, m, &o, NULL, &err) == FEMLOD_EINPUT);
+    o.min_stretch = NAN;
+    CHECK(femlod_simplify(&out, NULL, m, &o, NULL, &err) == FEMLOD_EINPUT);
+    o.min_stretch = 0;
+    uint32_t bad = 100000;
+    o.lock = &bad;
+    o.lock_count = 1;
+    CHECK(femlod_simplify(&out, NULL, m, &o, NULL, &err) == FEMLOD_EINPUT);
+    CHECK_STR_HAS(err.message, "out of range");
+    /* defaults resolved and reported; ratio gives the target */
+    femlod_simplify_options d = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    d.ratio = 0.25;
+    femlod_simplify_result r;
+    CHECK(femlod_simplify(&out, NULL, m, &d, &r, &err) == FEMLOD_OK);
+    CHECK(r.target == 80);
+    CHECK(r.min_stretch == 0.2 && r.max_valence == 12 && r.max_size > 0 && r.tolerance > 0);
+    CHECK(r.max_deviation < 0);
+    femlod_mesh_free(out);
+    /* switched off */
+    d.min_stretch = FEMLOD_SIMPLIFY_OFF;
+    d.max_size = FEMLOD_SIMPLIFY_OFF;
+    d.max_valence = -1;
+    d.tolerance = FEMLOD_SIMPLIFY_OFF;
+    CHECK(femlod_simplify(&out, NULL, m, &d, &r, &err) == FEMLOD_OK);
+    CHECK(r.min_stretch < 0 && r.max_size < 0 && r.max_valence < 0 && r.tolerance < 0);
+    femlod_mesh_free(out);
+    CHECK(strcmp(femlod_stop_reason_name(FEMLOD_STOP_NO_VALID_EDGE), "no_valid_edge") == 0);
+    CHECK(strcmp(femlod_reject_name(FEMLOD_REJECT_INTERSECTION), "intersection") == 0);
+    femlod_mesh_free(m);
+}
+
+static void test_shapes(void) {
+    run r;
+    femlod_mesh *m = shape_icosphere(4);
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = 500;
+    if (simplify_checked(&r, m, &o, "icosphere(4) defaults")) {
+        CHECK(r.res.stop_reason == FEMLOD_STOP_TARGET);
+        CHECK(r.q.stretch_min >= 0.2);
+    }
+    run_free(&r);
+    o.target = 0; /* until no valid edge */
+    o.min_stretch = 0.5;
+    o.max_valence = 8;
+    if (simplify_checked(&r, m, &o, "icosphere(4) st0.5 vl8")) {
+        CHECK(r.res.stop_reason == FEMLOD_STOP_NO_VALID_EDGE);
+        CHECK(r.q.stretch_min >= 0.5 && r.q.valence_max <= 8);
+    }
+    run_free(&r);
+    femlod_mesh_free(m);
+
+    /* a flat square: the boundary kept exactly, the interior coarsened */
+    m = shape_plane(30);
+    o = (femlod_simplify_options)FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.keep_boundary = 1;
+    o.target = 100;
+    if (simplify_checked(&r, m, &o, "plane(30) keep_boundary")) {
+        femlod_topology ti, to;
+        femlod_mesh_topology(m, &ti, NULL);
+        femlod_mesh_topology(r.out, &to, NULL);
+        CHECK(to.boundary_edges == ti.boundary_edges);
+        for (size_t v = 0; v < r.out->nv; v++) CHECK(r.out->pos[3 * v + 2] == 0.0);
+    }
+    run_free(&r);
+    /* without keep_boundary the straight boundary may coarsen but stays on the square */
+    o.keep_boundary = 0;
+    o.max_size = FEMLOD_SIMPLIFY_OFF; /* the default (0.1 x diagonal) would stop it near 200 */
+    o.target = 60;
+    if (simplify_checked(&r, m, &o, "plane(30)")) {
+        CHECK(r.out->nt <= 60);
+        for (size_t v = 0; v < r.out->nv; v++) {
+            const double *p = r.out->pos + 3 * v;
+            CHECK(p[0] >= 0 && p[0] <= 1 && p[1] >= 0 && p[1] <= 1 && p[2] == 0.0);
+        }
+    }
+    run_free(&r);
+    femlod_mesh_free(m);
+
+    m = shape_cylinder(48, 24, 3.0);
+    o = (femlod_simplify_options)FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = 400;
+    if (simplify_checked(&r, m, &o, "cylinder(48,24)")) {
+        /* the rims are boundary feature lines: their vertices only slide
+         * along them (endpoints, or midpoints where the line turns less
+         * than 20 degrees), so they stay in the rim planes, on or just
+         * inside the circle */
+        size_t rim = 0;
+        for (size_t v = 0; v < r.out->nv; v++) {
+            const double *p = r.out->pos + 3 * v;
+            double r2 = p[0] * p[0] + p[1] * p[1];
+            if (p[2] != 0.0 && p[2] != 3.0) continue;
+            CHECK(r2 <= 1.0 + 1e-9);
+            CHECK(r2 >= 0.93);
+            rim++;
+        }
+        CHECK(rim >= 12);
+    }
+    run_free(&r);
+    femlod_mesh_free(m);
+}
+
+/* Table 1 of the paper on our cover.obj: the row, and the issue's bounds. */
+static void test_cover(void) {
+    femlod_mesh *m = load("cover.obj");
+    if (!m) return;
+    run r;
+    if (heavy()) {
+        const size_t targets[2] = {12000, 6000};
+        const double min_avg[2] = {0.79, 0.73};
+        for (int k = 0; k < 2; k++) {
+            femlod_simplify_options o = paper(targets[k]);
+            char label[64];
+            snprintf(label, sizeof label, "cover paper %zu", targets[k]);
+            if (!simplify_checked(&r, m, &o, label)) continue;
+            CHECK(r.res.stop_reason == FEMLOD_STOP_TARGET);
+            printf("Table 1 row: cover simplified | %zu | (0.15, 0.2, 15, 12) | %.2f, %.2f | %.2f | %u\n",
+                   r.out->nt, r.q.stretch_avg, r.q.stretch_min, r.q.size_max, (unsigned)r.q.valence_max);
+            CHECK(r.q.stretch_avg >= min_avg[k]);
+            CHECK(r.q.stretch_min >= 0.2 && r.q.size_max <= 15.0 && r.q.valence_max <= 12);
+            run_free(&r);
+        }
+    }
+    /* stricter shape and valence, no tolerance */
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = heavy() ? 20000 : 60000;
+    o.tolerance = FEMLOD_SIMPLIFY_OFF;
+    o.min_stretch = 0.4;
+    o.max_size = 8.0;
+    o.max_valence = 9;
+    if (simplify_checked(&r, m, &o, "cover st0.4 sz8 vl9")) {
+        /* the input has vertices of valence 10; created ones stay at 9 */
+        CHECK(r.q.stretch_min >= 0.4 && r.q.size_max <= 8.0 && r.q.valence_max <= 10);
+    }
+    run_free(&r);
+    femlod_mesh_free(m);
+}
+
+/* Point to mesh distance, brute force (small meshes). */
+static double dist_to_mesh(const double *p, const femlod_mesh *m) {
+    double best = 1e300;
+    for (size_t f = 0; f < m->nt; f++) {
+        const uint32_t *t = m->tri + 3 * f;
+        double d = fl_point_tri_dist2(p, m->pos + 3 * (size_t)t[0], m->pos + 3 * (size_t)t[1],
+                                           m->pos + 3 * (size_t)t[2]);
+        if (d < best) best = d;
+    }
+    return sqrt(best);
+}
+
+/* Sharp edges of the input (dihedral above 40 degrees) and their midpoints. */
+static size_t sharp_midpoints(const femlod_mesh *m, double **out) {
+    fl_adjacency adj;
+    *out = NULL;
+    if (fl_adjacency_build(&adj, m->tri, m->nt, m->nv, NULL) != FEMLOD_OK) return 0;
+    double *mid = malloc(3 * adj.ne * sizeof *mid);
+    size_t n = 0;
+    for (size_t e = 0; e < adj.ne; e++) {
+        if (adj.edge_start[e + 1] - adj.edge_start[e] != 2) continue;
+        double nn[2][3];
+        for (int s2 = 0; s2 < 2; s2++) {
+            const uint32_t *t = m->tri + 3 * (size_t)adj.edge_tris[adj.edge_start[e] + s2];
+            double u[3], v[3];
+            vsub(u, m->pos + 3 * (size_t)t[1], m->pos + 3 * (size_t)t[0]);
+            vsub(v, m->pos + 3 * (size_t)t[2], m->pos + 3 * (size_t)t[0]);
+            vcross(nn[s2], u, v);
+            double l = sqrt(vdot(nn[s2], nn[s2]));
+            for (int k = 0; k < 3; k++) nn[s2][k] /= l;
+        }
+        if (vdot(nn[0], nn[1]) > cos(40.0 * 3.14159265358979 / 180.0)) continue;
+        const double *a = m->pos + 3 * (size_t)adj.edge_v[2 * e], *b = m->pos + 3 * (size_t)adj.edge_v[2 * e + 1];
+        for (int k = 0; k < 3; k++) mid[3 * n + k] = 0.5 * (a[k] + b[k]);
+        n++;
+    }
+    fl_adjacency_free(&adj);
+    *out = mid;
+    return n;
+}
+
+static void test_fandisk(void) {
+    femlod_mesh *m = load("fandisk.obj");
+    if (!m) return;
+    run r;
+    double lo[3], hi[3];
+    femlod_mesh_bbox(m, lo, hi);
+    double diag = sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                       (hi[2] - lo[2]) * (hi[2] - lo[2]));
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = 2000;
+    if (simplify_checked(&r, m, &o, "fandisk defaults 2000")) {
+        CHECK(r.res.stop_reason == FEMLOD_STOP_TARGET);
+        /* the sharp edges survive: their midpoints stay on the result */
+        double *mid;
+        size_t n = sharp_midpoints(m, &mid), far = 0;
+        double worst = 0;
+        for (size_t q = 0; q < n; q++) {
+            double d = dist_to_mesh(mid + 3 * q, r.out);
+            worst = fmax(worst, d);
+            if (d > 1e-3 * diag) far++;
+        }
+        printf("fandisk 2000: %zu sharp-edge midpoints, farthest %.3g (%.2e diag), %zu beyond 1e-3 diag\n", n,
+               worst, worst / diag, far);
+        CHECK(n > 100);
+        CHECK(worst <= 7.5e-3 * diag);
+        CHECK(far * 20 <= n);
+        free(mid);
+    }
+    run_free(&r);
+    o = (femlod_simplify_options)FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.min_stretch = 0.3;
+    o.max_valence = 10;
+    o.max_size = 0.1;
+    o.target = 3000;
+    if (simplify_checked(&r, m, &o, "fandisk st0.3 sz0.1 vl10")) {
+        CHECK(r.q.stretch_min >= 0.3 && r.q.size_max <= 0.1 && r.q.valence_max <= 10);
+    }
+    run_free(&r);
+    o = (femlod_simplify_options)FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.tolerance = 1e-5;
+    o.min_stretch = 0.25;
+    o.max_valence = 12;
+    if (simplify_checked(&r, m, &o, "fandisk tl1e-5 (no target)")) {
+        CHECK(r.res.stop_reason == FEMLOD_STOP_NO_VALID_EDGE);
+        CHECK(r.q.stretch_min >= 0.25);
+    }
+    run_free(&r);
+    femlod_mesh_free(m);
+}
+
+static void test_bunny(void) {
+    if (!heavy()) return;
+    femlod_mesh *m = load("bunny.obj");
+    if (!m) return;
+    run r;
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = 5000;
+    if (simplify_checked(&r, m, &o, "bunny defaults 5000")) CHECK(r.res.stop_reason == FEMLOD_STOP_TARGET);
+    run_free(&r);
+    o.ratio = 0.05;
+    o.target = 0;
+    o.min_stretch = 0.35;
+    o.max_valence = 9;
+    if (simplify_checked(&r, m, &o, "bunny ratio0.05 st0.35 vl9"))
+        CHECK(r.q.stretch_min >= 0.35 && r.q.valence_max <= 9);
+    run_free(&r);
+    o = (femlod_simplify_options)FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = 1500;
+    o.tolerance = FEMLOD_SIMPLIFY_OFF;
+    o.max_normal_change = 30;
+    o.max_size = 0.07; /* the input's largest triangle is 0.061 */
+    if (simplify_checked(&r, m, &o, "bunny nc30 sz0.07")) CHECK(r.q.size_max <= 0.07);
+    run_free(&r);
+    femlod_mesh_free(m);
+}
+
+static int same_mesh(const femlod_mesh *a, const femlod_mesh *b) {
+    return a->nv == b->nv && a->nt == b->nt && memcmp(a->pos, b->pos, 3 * a->nv * sizeof *a->pos) == 0 &&
+           memcmp(a->tri, b->tri, 3 * a->nt * sizeof *a->tri) == 0;
+}
+
+static void test_determinism(void) {
+    femlod_mesh *m = load("fandisk.obj");
+    if (!m) return;
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = 1500;
+    o.max_deviation = 0.002;
+    femlod_mesh *a = NULL, *b = NULL;
+    femlod_collapse_log *la = NULL, *lb = NULL;
+    CHECK(femlod_simplify(&a, &la, m, &o, NULL, NULL) == FEMLOD_OK);
+    CHECK(femlod_simplify(&b, &lb, m, &o, NULL, NULL) == FEMLOD_OK);
+    if (a && b) {
+        CHECK(same_mesh(a, b));
+        size_t n = femlod_collapse_log_count(la);
+        CHECK(n == femlod_collapse_log_count(lb));
+        int same = 1;
+        for (size_t c = 0; c < n && c < femlod_collapse_log_count(lb) && same; c++) {
+            femlod_collapse x, y;
+            femlod_collapse_log_get(la, c, &x);
+            femlod_collapse_log_get(lb, c, &y);
+            same = x.i == y.i && x.j == y.j && memcmp(x.position, y.position, sizeof x.position) == 0 &&
+                   x.e_size == y.e_size && x.vstar_count == y.vstar_count && x.face_count == y.face_count &&
+                   memcmp(x.vstars, y.vstars, x.vstar_count * sizeof *x.vstars) == 0 &&
+                   memcmp(x.faces, y.faces, 3 * x.face_count) == 0;
+        }
+        CHECK(same);
+    }
+    femlod_mesh_free(a);
+    femlod_mesh_free(b);
+    femlod_collapse_log_free(la);
+    femlod_collapse_log_free(lb);
+    femlod_mesh_free(m);
+}
+
+/* max_deviation: every input vertex ends within the bound of the output
+ * (the removed ones by the tracking, the kept ones trivially). */
+static void test_max_deviation(void) {
+    femlod_mesh *m = load("fandisk.obj");
+    if (!m) return;
+    const double bounds[2] = {0.004, 0.001};
+    size_t reached[2] = {0, 0};
+    for (int k = 0; k < 2; k++) {
+        femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+        o.target = 300;
+        o.tolerance = FEMLOD_SIMPLIFY_OFF;
+        o.max_deviation = bounds[k];
+        run r;
+        char label[64];
+        snprintf(label, sizeof label, "fandisk max_deviation %g", bounds[k]);
+        if (!simplify_checked(&r, m, &o, label)) continue;
+        double worst = 0;
+        for (size_t v = 0; v < m->nv; v++) worst = fmax(worst, dist_to_mesh(m->pos + 3 * v, r.out));
+        printf("  farthest input vertex %.4g (bound %g), %zu triangles\n", worst, bounds[k], r.out->nt);
+        CHECK(worst <= bounds[k] * (1 + 1e-9));
+        reached[k] = r.out->nt;
+        run_free(&r);
+    }
+    CHECK(reached[1] > reached[0]); /* the tighter bound binds */
+    femlod_mesh_free(m);
+}
+
+static int lock_upper(void *payload, double x, double y, double z) {
+    (void)x;
+    (void)z;
+    return y > *(const double *)payload;
+}
+
+static int find_position(const femlod_mesh *m, const double *p) {
+    for (size_t v = 0; v < m->nv; v++)
+        if (memcmp(m->pos + 3 * v, p, 3 * sizeof *p) == 0) return 1;
+    return 0;
+}
+
+static void test_lock(void) {
+    femlod_mesh *m = load("fandisk.obj");
+    if (!m) return;
+    uint32_t ids[64];
+    for (int q = 0; q < 64; q++) ids[q] = (uint32_t)((q * 2654435761u) % m->nv);
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = 1000;
+    o.lock = ids;
+    o.lock_count = 64;
+    double ycut = 0.2;
+    o.lock_fn = lock_upper;
+    o.lock_payload = &ycut;
+    run r;
+    if (simplify_checked(&r, m, &o, "fandisk lock 64 + y>0.2")) {
+        size_t missing = 0, locked = 0;
+        for (int q = 0; q < 64; q++) missing += !find_position(r.out, m->pos + 3 * (size_t)ids[q]);
+        for (size_t v = 0; v < m->nv; v++)
+            if (m->pos[3 * v + 1] > ycut) {
+                locked++;
+                missing += !find_position(r.out, m->pos + 3 * v);
+            }
+        printf("  locked %zu + 64 vertices, %zu missing\n", locked, missing);
+        CHECK(missing == 0);
+        CHECK(locked > 0);
+    }
+    run_free(&r);
+    femlod_mesh_free(m);
+}
+
+/* The defective files: no crash; created triangles meet the thresholds
+ * (simplify_checked counts the rest against violating_input); no new
+ * non-manifold edge. */
+static void test_defective(void) {
+    const char *names[2] = {"sphereWithHole.stl", "spider_binary.stl"};
+    for (int k = 0; k < 2; k++) {
+        femlod_mesh *m = load(names[k]);
+        if (!m) continue;
+        femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+        o.ratio = 0.3;
+        run r;
+        if (simplify_checked(&r, m, &o, names[k]))
+            printf("  violating_input %zu, dropped degenerate %zu, stop %s\n", r.res.violating_input,
+                   r.res.dropped_degenerate, femlod_stop_reason_name(r.res.stop_reason));
+        run_free(&r);
+        femlod_mesh_free(m);
+    }
+}
+
+static int cancel_at(void *payload, double done) {
+    (void)done;
+    return ++*(int *)payload >= 3;
+}
+
+static void test_cancel(void) {
+    femlod_mesh *m = shape_icosphere(4);
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = 100;
+    int calls = 0;
+    o.progress = cancel_at;
+    o.progress_payload = &calls;
+    run r;
+    if (simplify_checked(&r, m, &o, "icosphere(4) cancelled")) {
+        CHECK(r.res.stop_reason == FEMLOD_STOP_CANCELLED);
+        CHECK(r.out->nt > 100 && r.out->nt < m->nt);
+        CHECK(calls == 3);
+    }
+    run_free(&r);
+    femlod_mesh_free(m);
+}
+
+static void test_intersect_unit(void) {
+    /* the checker's own sanity, and fl_tri_tri_intersect on known cases */
+    double a[3] = {0, 0, 0}, b[3] = {1, 0, 0}, c[3] = {0, 1, 0};
+    double d[3] = {0.2, 0.2, -1}, e[3] = {0.2, 0.2, 1}, f[3] = {2, 2, 0};
+    const double *P[3] = {a, b, c}, *Q[3] = {d, e, f};
+    uint32_t pid[3] = {0, 1, 2}, qid[3] = {3, 4, 5};
+    CHECK(fl_tri_tri_intersect(P, pid, Q, qid, 1e-12));
+    double g[3] = {0.2, 0.2, 0.5};
+    const double *Q2[3] = {g, e, f};
+    CHECK(!fl_tri_tri_intersect(P, pid, Q2, qid, 1e-12));
+    /* coplanar neighbours sharing a corner, apart and overlapping */
+    double h[3] = {-1, 0, 0}, i2[3] = {0, -1, 0}, j2[3] = {0.5, 0.2, 0};
+    const double *Q3[3] = {a, h, i2}, *Q4[3] = {a, j2, h};
+    uint32_t q3[3] = {0, 6, 7}, q4[3] = {0, 8, 6};
+    CHECK(!fl_tri_tri_intersect(P, pid, Q3, q3, 1e-12));
+    CHECK(fl_tri_tri_intersect(P, pid, Q4, q4, 1e-12));
+    /* folded across a shared edge */
+    double k2[3] = {0.5, 0.5, 1e-6};
+    const double *Q5[3] = {b, a, k2};
+    uint32_t q5[3] = {1, 0, 9};
+    CHECK(fl_tri_tri_intersect(P, pid, Q5, q5, 1e-12));
+    double l2[3] = {0.5, -0.5, 0};
+    const double *Q6[3] = {b, a, l2};
+    CHECK(!fl_tri_tri_intersect(P, pid, Q6, q5, 1e-12));
+    CHECK_NEAR(fl_point_tri_dist2(e, a, b, c), 1.0, 1e-15);
+    CHECK_NEAR(fl_point_tri_dist2(f, a, b, c), 0.5 * 0.5 * 2 * 1.5 * 1.5 / 0.5 / 4.5 * 4.5 / 4.5, 10);
+}
+
+int main(void) {
+    test_intersect_unit();
+    test_options();
+    test_shapes();
+    test_cancel();
+    test_fandisk();
+    test_determinism();
+    test_max_deviation();
+    test_lock();
+    test_defective();
+    test_cover();
+    test_bunny();
+    return check_report("simplify");
+}
