@@ -82,8 +82,8 @@ typedef struct femlod_mesh femlod_mesh;
 
 /* Makes a mesh from arrays (copied). positions holds 3*vertex_count
  * coordinates, triangles 3*triangle_count indices. Fails with FEMLOD_EINPUT
- * on an index >= vertex_count or a non-finite coordinate, and with
- * FEMLOD_ENOMEM when the counts exceed UINT32_MAX or memory. */
+ * on an index >= vertex_count, a non-finite coordinate or a count above
+ * UINT32_MAX, and with FEMLOD_ENOMEM when memory is short. */
 femlod_status femlod_mesh_create(femlod_mesh **out, const double *positions, size_t vertex_count,
                                  const uint32_t *triangles, size_t triangle_count,
                                  femlod_error *err);
@@ -224,11 +224,16 @@ typedef enum femlod_format {
     FEMLOD_FORMAT_OFF,
     FEMLOD_FORMAT_PLY,        /* reading: any supported encoding; writing: binary little-endian */
     FEMLOD_FORMAT_PLY_ASCII,
-    FEMLOD_FORMAT_PLY_BINARY
+    FEMLOD_FORMAT_PLY_BINARY,
+    FEMLOD_FORMAT_GLTF,       /* glTF 2.0, extension .gltf. Reading: JSON or GLB (told by the
+                                 'glTF' magic); writing: GLB when the path ends in .glb, else
+                                 JSON with the buffer embedded as a base64 data: URI */
+    FEMLOD_FORMAT_GLB         /* glTF 2.0 binary, extension .glb; writing: always GLB */
 } femlod_format;
 
 /* Format names as the Lua `format` option spells them: "obj", "stl",
- * "stl_ascii", "stl_binary", "off", "ply", "ply_ascii", "ply_binary". */
+ * "stl_ascii", "stl_binary", "off", "ply", "ply_ascii", "ply_binary",
+ * "gltf", "glb". */
 const char *femlod_format_name(femlod_format format);
 /* Returns FEMLOD_FORMAT_AUTO when the name is unknown. */
 femlod_format femlod_format_from_name(const char *name);
@@ -243,27 +248,52 @@ typedef struct femlod_read_options {
 /* Reads a mesh. OBJ, OFF and PLY keep the file's vertices and indices;
  * STL (which has no shared vertices) is welded: positions that compare equal
  * (-0.0 == 0.0) become one vertex, numbered in order of first appearance.
+ * glTF is welded the same way, after node transforms: every triangle
+ * primitive of the default scene, in world space (docs/formats.md).
  * Degenerate and duplicate triangles are kept. Errors name the place:
- * "FILE:LINE: message" for text, "FILE: byte N: message" for binary data. */
+ * "FILE:LINE: message" for text, "FILE: byte N: message" for binary data,
+ * "FILE: /accessors/3: message" (a JSON pointer) for glTF. */
 femlod_status femlod_mesh_read(femlod_mesh **out, const char *path,
                                const femlod_read_options *options, femlod_error *err);
 
 /* The same from memory; name is used in messages only. format must not be
- * FEMLOD_FORMAT_AUTO unless name has a known extension. */
+ * FEMLOD_FORMAT_AUTO unless name has a known extension. glTF from memory has
+ * no folder: a buffer in an external file is an error (data: URIs and GLB's
+ * own binary chunk are read). */
 femlod_status femlod_mesh_read_memory(femlod_mesh **out, const void *data, size_t size,
                                       const char *name, const femlod_read_options *options,
                                       femlod_error *err);
 
+/* What glTF output colours its vertices by (femlod_write_options.color_by).
+ * The colour is COLOR_0 (linear float RGB, the viridis map), the raw value a
+ * float attribute _STRETCH, _SIZE or _VALENCE; docs/formats.md has the scales. */
+typedef enum femlod_color_by {
+    FEMLOD_COLOR_NONE = 0,  /* no colours */
+    FEMLOD_COLOR_STRETCH,   /* per triangle (flat): stretch on [0, 1] */
+    FEMLOD_COLOR_SIZE,      /* per triangle (flat): longest edge, on [min, max] of the mesh */
+    FEMLOD_COLOR_VALENCE    /* per vertex: valence, on [3, 12] (clamped) */
+} femlod_color_by;
+
 typedef struct femlod_write_options {
     femlod_format format; /* FEMLOD_FORMAT_AUTO: from the extension */
+    /* The fields below apply to glTF output only; set for another format,
+     * they make the write fail with FEMLOD_EINPUT. */
+    femlod_color_by color_by; /* FEMLOD_COLOR_NONE: no COLOR_0, no material */
+    int normals;              /* nonzero: write NORMAL, area-weighted vertex normals */
+    /* NULL, or a JSON object (UTF-8 text), e.g. the recipe's parameters,
+     * stored as asset.extras.params; not JSON or not an object fails with
+     * FEMLOD_EINPUT. Borrowed for the call. */
+    const char *extras;
 } femlod_write_options;
-#define FEMLOD_WRITE_OPTIONS_INIT {FEMLOD_FORMAT_AUTO}
+#define FEMLOD_WRITE_OPTIONS_INIT {FEMLOD_FORMAT_AUTO, FEMLOD_COLOR_NONE, 0, NULL}
 
 /* Writes a mesh. Output goes to a temporary file beside path that is renamed
  * over path only once complete, so a failed write leaves path as it was.
  * Text formats print each coordinate with the fewest digits that read back
  * to the same double (locale-independent); binary STL stores float32, binary
- * PLY stores float64, so PLY and text formats round-trip exactly. */
+ * PLY stores float64, so PLY and text formats round-trip exactly. glTF
+ * stores float32 positions (a coordinate beyond the float range fails with
+ * FEMLOD_EINPUT) and the quality figures in asset.extras.quality. */
 femlod_status femlod_mesh_write(const femlod_mesh *mesh, const char *path,
                                 const femlod_write_options *options, femlod_error *err);
 
@@ -302,8 +332,8 @@ typedef struct femlod_simplify_options {
     double ratio;
     /* tau_TL (C1): the largest quadric error d_ij(k) of a collapse, in the
      * paper's units: a sum of squared distances to face planes and
-     * (weighted) feature lines, length^2. Default: 0.06 * (mean input edge
-     * length)^2 * (input triangles / 1000)^(1/2)... see docs/simplify.md. */
+     * (weighted) feature lines, length^2. Default: 4 * (mean input edge
+     * length)^2 (docs/simplify.md says why). */
     double tolerance;
     /* Length: no removed input vertex may end farther than this from the
      * output surface (tracked per triangle, as PMP's decimation does).
@@ -313,10 +343,12 @@ typedef struct femlod_simplify_options {
      * [0, 1]) of every created triangle. Default 0.2. */
     double min_stretch;
     /* tau_SZ (C3): longest edge of every created triangle, length.
-     * Default: 0.1 * bounding-box diagonal. */
+     * Default: max(0.1 * bounding-box diagonal, 2 * the longest edge of any
+     * input triangle). */
     double max_size;
     /* tau_VL (C4): most neighbours of every created vertex. Default 12;
-     * < 0: off (vertices with more than 253 neighbours are never created). */
+     * < 0: off (vertices with more than 251 neighbours are never created:
+     * the collapse log holds at most 253 neighbours per collapse). */
     int max_valence;
     /* Degrees: an edge whose two triangles' normals differ by more than this
      * is a sharp feature edge. Boundary and non-manifold edges always are.
@@ -324,7 +356,7 @@ typedef struct femlod_simplify_options {
     double feature_angle;
     /* Weight of the line quadric of a feature edge, relative to one face
      * plane, scaled by sharpness (1 - cos dihedral) / 2, and full weight for
-     * boundary and non-manifold edges. Default 10; off: no line quadrics
+     * boundary and non-manifold edges. Default 2; off: no line quadrics
      * (features still never merge or leave their line). */
     double feature_weight;
     /* Degrees: no collapse may turn a triangle's normal by more than this,
@@ -451,7 +483,8 @@ void femlod_collapse_log_free(femlod_collapse_log *log);
  * triangles in the order of the input triangles they descend from. Unused
  * input vertices and triangles with a repeated index are not carried over
  * (result->dropped_degenerate counts the latter).
- * Fails with FEMLOD_EINPUT for inconsistent options, FEMLOD_ENOMEM.
+ * out and mesh must not be NULL (asserted). Fails with FEMLOD_EINPUT for
+ * inconsistent options, FEMLOD_ENOMEM.
  * Deterministic: the same input and options give identical arrays. */
 femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **log, const femlod_mesh *mesh,
                               const femlod_simplify_options *options, femlod_simplify_result *result,
@@ -532,16 +565,100 @@ femlod_status femlod_hierarchy_refine(femlod_hierarchy *h, double size, femlod_s
 femlod_status femlod_hierarchy_coarsen(femlod_hierarchy *h, double size, femlod_size_fn fn,
                                        void *payload, size_t *ops, femlod_error *err);
 
-/* The front as a mesh, in time linear in the front. Vertices are the front
- * nodes used by a triangle, in order of first use; when nodes is not NULL,
- * *nodes gets a malloc'd array (free with free()) of each vertex's node id. */
+/* The front as a mesh, in time linear in the front. The order is canonical:
+ * vertices are the front nodes used by a triangle in increasing node id,
+ * triangles in the order they first appeared during simplification (input
+ * triangles first), so a front gives the same mesh however it was reached.
+ * When nodes is not NULL, *nodes gets a malloc'd array (free with free()) of
+ * each vertex's node id. */
 femlod_status femlod_hierarchy_extract(femlod_hierarchy *h, femlod_mesh **out, uint32_t **nodes,
                                        femlod_error *err);
+
+/* Global LOD with density preservation (paper 5.3.2): collapses the pair
+ * whose parent has the smallest r = e_size / S_REF, or splits the front node
+ * with the largest r, until the front has `target` triangles (or the
+ * nearest count the hierarchy allows: dependencies can move it by a few).
+ * S_REF is fixed from the front when the call starts, so the density
+ * distribution of that front is kept. *ops gets the operations done. */
+femlod_status femlod_hierarchy_rescale(femlod_hierarchy *h, size_t target, size_t *ops,
+                                       femlod_error *err);
+
+/* Saves the hierarchy and its current front to a versioned binary file
+ * (".flh", docs/formats.md) with a CRC-32 checksum, written atomically;
+ * result (may be NULL) is the simplification's result, stored with it. */
+femlod_status femlod_hierarchy_save(const femlod_hierarchy *h, const char *path,
+                                    const femlod_simplify_result *result, femlod_error *err);
+/* Loads a saved hierarchy with its front. A damaged, truncated or foreign
+ * file fails with FEMLOD_EPARSE and a message naming the byte offset or the
+ * inconsistency, a file of another format version with FEMLOD_EUNSUPPORTED;
+ * result (may be NULL) gets the stored simplification result (zeroed when
+ * the file has none). */
+femlod_status femlod_hierarchy_load(femlod_hierarchy **out, const char *path,
+                                    femlod_simplify_result *result, femlod_error *err);
 
 /* Checks the invariant from scratch, in time linear in the hierarchy: the
  * front is a cut, the applied collapses are closed under vstars, and the
  * front's triangles are exactly the faces whose corners are all on it. */
 femlod_status femlod_hierarchy_validate(const femlod_hierarchy *h, femlod_error *err);
+
+/* }==================================================================== */
+
+/* {=== Curvature (paper 5.3.1, normal cycle) */
+
+/*
+ * Per-vertex principal curvatures and directions of the input mesh, from
+ * the normal-cycle curvature tensor of Cohen-Steiner and Morvan as Alliez
+ * et al. use it (docs/curvature.md): for vertex v, the tensor
+ *     T = sum_e beta(e) W(e) ebar ebar^T / sum_e A(e) W(e) / |e|
+ * over the edges e of the surface within distance `radius` of v that is
+ * connected to v (a walk over triangles from v's own), with beta(e) the
+ * signed dihedral angle of e, ebar its unit direction, A(e) a third of the
+ * area of its triangles and W(e) the length of e inside the ball weighted
+ * by 1 - (distance to v / radius)^2: the papers' beta(e) |e cap B| over the
+ * area of B, with a weight that falls to 0 at the ball's surface (it
+ * makes the worst vertex of a fine sphere 1% off instead of 5%).
+ *
+ * Units: curvatures are 1/length (1/R on a sphere of radius R). Sign: with
+ * respect to the triangles' orientation, positive where the surface bends
+ * away from the side its normals face (a sphere with outward normals has
+ * k1 = k2 = +1/R; the inside of a hole is negative).
+ *
+ * Boundary edges (one triangle) and non-manifold edges (three or more)
+ * contribute no bending, but their share of area counts: within `radius`
+ * of a boundary, curvature across the boundary line is underestimated
+ * (by up to 40% on the cut of a sphere; a cylinder's rims, which bend
+ * along themselves, lose nothing). Degenerate triangles (repeated corner or
+ * stretch < 1e-6) count for nothing, but the walk passes through them. An
+ * edge whose two triangles disagree on orientation is measured against the
+ * first (lower-index) triangle's.
+ */
+typedef struct femlod_curvature_options {
+    /* Radius of the neighbourhood ball, length; 0: 2 x the mean length of
+     * the mesh's distinct edges. The work per vertex grows as
+     * (radius / edge length)^2. */
+    double radius;
+} femlod_curvature_options;
+#define FEMLOD_CURVATURE_OPTIONS_INIT {0.0}
+
+/* Fills per-vertex arrays, caller-allocated, any of them NULL when not
+ * wanted: k1, k2 and kappa have vertex_count entries, dir1 and dir2
+ * 3*vertex_count. k1 >= k2 by value (k1 is the algebraically larger
+ * principal curvature, not the larger in magnitude); kappa = max(|k1|, |k2|).
+ * dir1 is the unit direction of k1 and dir2 that of k2, tangent to the
+ * surface and perpendicular; a direction is a line, its sign fixed by
+ * convention (dir1's largest component is positive; dir1, dir2 and the
+ * surface normal are right-handed). Where k1 == k2 the directions are any
+ * orthonormal tangent pair. A vertex used by no triangle, or whose
+ * neighbourhood holds only degenerate ones, gets zeros everywhere,
+ * directions included.
+ * options NULL: the defaults. Time: linear in the mesh size times the
+ * triangles within radius of a vertex. Deterministic. Fails with
+ * FEMLOD_EINPUT when radius is negative or not finite (nothing written) and
+ * with FEMLOD_ENOMEM. */
+femlod_status femlod_mesh_curvature(const femlod_mesh *mesh,
+                                    const femlod_curvature_options *options, double *k1,
+                                    double *k2, double *kappa, double *dir1, double *dir2,
+                                    femlod_error *err);
 
 /* }==================================================================== */
 

@@ -231,9 +231,7 @@ static int uf_union(uint32_t *parent, uint32_t x, uint32_t y) {
 }
 
 femlod_status fl_adjacency_topology(const fl_adjacency *adj, const uint32_t *tri,
-                                    femlod_topology *out, femlod_error *err) {
-    memset(out, 0, sizeof *out);
-    out->edges = adj->ne;
+                                    femlod_topology *result, femlod_error *err) {
     size_t nv = adj->nv, nt = adj->nt;
     unsigned char *vbad = fl_calloc(nv, 1);
     uint32_t *parent = fl_alloc(nt, sizeof *parent);
@@ -242,6 +240,10 @@ femlod_status fl_adjacency_topology(const fl_adjacency *adj, const uint32_t *tri
         free(parent);
         return fl_error(err, FEMLOD_ENOMEM, "out of memory in topology of %zu triangles", nt);
     }
+    /* Filled locally: *result is written only on success. */
+    femlod_topology top, *out = &top;
+    memset(out, 0, sizeof *out);
+    out->edges = adj->ne;
     for (size_t e = 0; e < adj->ne; e++) {
         uint32_t n = adj->edge_start[e + 1] - adj->edge_start[e];
         uint32_t a = adj->edge_v[2 * e], b = adj->edge_v[2 * e + 1];
@@ -295,6 +297,7 @@ femlod_status fl_adjacency_topology(const fl_adjacency *adj, const uint32_t *tri
     out->closed = adj->ne > 0 && out->boundary_edges == 0 && out->nonmanifold_edges == 0;
     out->manifold = out->nonmanifold_edges == 0 && out->nonmanifold_vertices == 0;
     out->oriented = out->inconsistent_edges == 0;
+    *result = top;
     return FEMLOD_OK;
 }
 

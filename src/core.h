@@ -126,6 +126,15 @@ FL_INTERNAL unsigned fl_quality_histogram_bin(double stretch);
 
 /* }====== */
 
+/* {====== curvature (curvature.c) */
+
+/* Eigen-decomposition of the symmetric 3x3 m = (xx, xy, xz, yy, yz, zz) by
+ * cyclic Jacobi rotations: value[k] with the unit eigenvector
+ * vector[3k..3k+2], in no particular order; the vectors are orthonormal. */
+FL_INTERNAL void fl_curvature_eigen3(const double m[6], double value[3], double vector[9]);
+
+/* }====== */
+
 /* {====== file helpers (fileio.c) */
 
 /* Reads a whole file into memory (NUL-terminated; *size excludes the NUL). */
@@ -137,7 +146,8 @@ FL_INTERNAL femlod_status fl_file_read_all(const char *path, char **data, size_t
 typedef struct fl_out {
     FILE *fp;
     char *tmp_path;
-    const char *path;
+    const char *path; /* as the caller named it, for messages */
+    char *target;     /* what is replaced: path, or the file a symbolic link at path points to */
 } fl_out;
 
 FL_INTERNAL femlod_status fl_out_open(fl_out *o, const char *path, femlod_error *err);
@@ -168,10 +178,23 @@ FL_INTERNAL femlod_status fl_read_off(femlod_mesh **out, const char *data, size_
 FL_INTERNAL femlod_status fl_read_ply(femlod_mesh **out, const char *data, size_t size,
                                       const char *name, femlod_error *err);
 
+/* glTF (io_gltf.cpp, C++ behind a C face). file is the path the data came
+ * from, whose folder may hold external buffers; NULL when reading memory
+ * (external buffers are then an error). format is the one asked for
+ * (FEMLOD_FORMAT_GLB or _GLTF): JSON or GLB is told by the data. */
+FL_INTERNAL femlod_status fl_read_gltf(femlod_mesh **out, const char *data, size_t size,
+                                       const char *name, const char *file, femlod_format format,
+                                       femlod_error *err);
+
 FL_INTERNAL femlod_status fl_write_obj(const femlod_mesh *m, FILE *fp);
 FL_INTERNAL femlod_status fl_write_stl(const femlod_mesh *m, FILE *fp, int binary);
 FL_INTERNAL femlod_status fl_write_off(const femlod_mesh *m, FILE *fp);
 FL_INTERNAL femlod_status fl_write_ply(const femlod_mesh *m, FILE *fp, int binary);
+/* Unlike the writers above, fills err on every failure (names path), as a
+ * glTF write can also fail on its options (EINPUT) or size (ELIMIT). */
+FL_INTERNAL femlod_status fl_write_gltf(const femlod_mesh *m, FILE *fp, int binary,
+                                        const femlod_write_options *options, const char *path,
+                                        femlod_error *err);
 
 /* Shared by the text readers (io.c). fl_io_quote copies token s[0..n) into buf
  * for a message: at most 40 bytes, bytes outside printable ASCII as '?', "..."

@@ -132,28 +132,50 @@ femlod_status fl_out_open(fl_out *o, const char *path, femlod_error *err) {
     o->fp = NULL;
     o->tmp_path = NULL;
     o->path = path;
+    o->target = NULL;
 
-    size_t len = strlen(path);
+    /* A symbolic link is followed: the file it points to is replaced and the
+     * link stays, as a user who writes "through" a link expects. */
+    struct stat lst;
+    char *target;
+    if (lstat(path, &lst) == 0 && S_ISLNK(lst.st_mode)) {
+        target = realpath(path, NULL);
+        if (!target)
+            return fl_error(err, FEMLOD_EIO, "%s: cannot follow symbolic link: %s", path,
+                            strerror(errno));
+    } else {
+        size_t n = strlen(path) + 1;
+        target = fl_alloc(n, 1);
+        if (!target) return fl_error(err, FEMLOD_ENOMEM, "%s: out of memory", path);
+        memcpy(target, path, n);
+    }
+
+    size_t len = strlen(target);
     char *tmp = fl_alloc(len + sizeof suffix, 1);
-    if (!tmp) return fl_error(err, FEMLOD_ENOMEM, "%s: out of memory", path);
-    memcpy(tmp, path, len);
+    if (!tmp) {
+        free(target);
+        return fl_error(err, FEMLOD_ENOMEM, "%s: out of memory", path);
+    }
+    memcpy(tmp, target, len);
     memcpy(tmp + len, suffix, sizeof suffix);
 
     int fd = mkstemp(tmp);
     if (fd < 0) {
         int e = errno;
         free(tmp);
+        free(target);
         return fl_error(err, FEMLOD_EIO, "%s: cannot create temporary file: %s", path, strerror(e));
     }
     /* Replacing a file keeps its permissions; a new file gets the usual ones. */
     struct stat st;
-    mode_t mode = (stat(path, &st) == 0 && S_ISREG(st.st_mode)) ? (mode_t)(st.st_mode & 07777)
+    mode_t mode = (stat(target, &st) == 0 && S_ISREG(st.st_mode)) ? (mode_t)(st.st_mode & 07777)
                                                                 : default_mode();
     if (fchmod(fd, mode) != 0) {
         int e = errno;
         close(fd);
         unlink(tmp);
         free(tmp);
+        free(target);
         return fl_error(err, FEMLOD_EIO, "%s: cannot set permissions of temporary file: %s", path,
                         strerror(e));
     }
@@ -163,10 +185,12 @@ femlod_status fl_out_open(fl_out *o, const char *path, femlod_error *err) {
         close(fd);
         unlink(tmp);
         free(tmp);
+        free(target);
         return fl_error(err, FEMLOD_EIO, "%s: cannot open temporary file: %s", path, strerror(e));
     }
     o->fp = fp;
     o->tmp_path = tmp;
+    o->target = target;
     return FEMLOD_OK;
 }
 
@@ -176,8 +200,10 @@ void fl_out_abort(fl_out *o) {
         unlink(o->tmp_path);
         free(o->tmp_path);
     }
+    free(o->target);
     o->fp = NULL;
     o->tmp_path = NULL;
+    o->target = NULL;
 }
 
 /* The rename is only durable once the folder entry is on disk too. */
@@ -228,7 +254,7 @@ femlod_status fl_out_commit(fl_out *o, femlod_error *err) {
     } else if (fclose(fp) != 0) {
         what = "cannot close";
         e = errno;
-    } else if (rename(o->tmp_path, o->path) != 0) {
+    } else if (rename(o->tmp_path, o->target) != 0) {
         what = "cannot rename temporary file into place";
         e = errno;
     }
@@ -236,11 +262,15 @@ femlod_status fl_out_commit(fl_out *o, femlod_error *err) {
         if (o->tmp_path) unlink(o->tmp_path);
         free(o->tmp_path);
         o->tmp_path = NULL;
+        free(o->target);
+        o->target = NULL;
         return fl_error(err, FEMLOD_EIO, "%s: %s: %s", o->path, what, strerror(e));
     }
     free(o->tmp_path);
     o->tmp_path = NULL;
-    e = sync_parent_dir(o->path);
+    e = sync_parent_dir(o->target);
+    free(o->target);
+    o->target = NULL;
     if (e) {
         /* The new content is in place; only its durability is in doubt. */
         return fl_error(err, FEMLOD_EIO, "%s: written, but cannot sync its folder: %s", o->path,

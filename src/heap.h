@@ -1,5 +1,5 @@
 /*
- * heap.h - indexed binary max-heap with update (internal).
+ * heap.h - indexed 4-ary max-heap with update (internal).
  *
  * Items are dense indices 0..capacity-1 (edge slots of the simplifier), each
  * in the heap at most once with a double key. Order: larger key first, equal
@@ -18,7 +18,8 @@ typedef struct fl_heap_entry {
 } fl_heap_entry;
 
 typedef struct fl_heap {
-    fl_heap_entry *e; /* n entries in heap order */
+    fl_heap_entry *e; /* n entries in heap order (inside base, aligned) */
+    fl_heap_entry *base;
     uint32_t *pos;    /* capacity: heap index of each item, UINT32_MAX when absent */
     size_t n, capacity;
 } fl_heap;
@@ -35,6 +36,8 @@ FL_INTERNAL uint32_t fl_heap_pop(fl_heap *h, double *key);
 
 static inline int fl_heap_contains(const fl_heap *h, uint32_t item) { return h->pos[item] != UINT32_MAX; }
 static inline size_t fl_heap_size(const fl_heap *h) { return h->n; }
+/* The first item (the heap must not be empty). */
+static inline uint32_t fl_heap_top(const fl_heap *h) { return h->e[0].item; }
 /* The first key; -inf when empty. */
 static inline double fl_heap_top_key(const fl_heap *h) { return h->n ? h->e[0].key : -__builtin_inf(); }
 

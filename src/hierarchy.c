@@ -25,45 +25,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-enum { ABOVE = 0, FRONT = 1, BELOW = 2 };
-
-#define NONE UINT32_MAX
-
-struct femlod_hierarchy {
-    size_t nv;      /* leaves: input vertices */
-    size_t nc;      /* collapses: internal nodes nv .. nv+nc-1 */
-    size_t nn;      /* nodes */
-    size_t nf_in;   /* input faces (degenerate input triangles excluded) */
-    size_t nf;      /* every face that ever existed */
-    double *pos;    /* 3*nn */
-    double *e_size; /* nn */
-    uint32_t *parent;      /* nn */
-    uint32_t *child;       /* 2*nc */
-    uint32_t *depth;       /* nn: ancestors above the node */
-    uint32_t *vstar_start; /* nc+1 */
-    uint32_t *vstars;
-    uint32_t *dep_start;   /* nn+1: dependents, the reverse of vstars */
-    uint32_t *deps;
-    uint32_t *face_v;      /* 3*nf */
-    uint32_t *removed_start; /* nc+1 */
-    uint32_t *removed;       /* face ids removed by each collapse */
-    uint32_t *created_start; /* nc+1: created faces of c are nf_in + created_start[c] .. */
-    /* state */
-    uint8_t *state;        /* nn */
-    uint32_t *front;       /* front nodes, in no particular order */
-    uint32_t *front_pos;   /* nn: index in front[] or NONE */
-    size_t front_n;
-    uint32_t *active;      /* active faces */
-    uint32_t *active_pos;  /* nf */
-    size_t active_n;
-    /* scratch */
-    uint32_t *stack;       /* nn */
-    uint32_t *work;        /* worklist of refine/coarsen, nn + 2*nc */
-    size_t work_n, work_cap;
-    int collect;           /* push the children of every split / the parent of every collapse */
-    uint32_t *stamp;       /* nn, for extraction */
-    uint32_t epoch;
-};
+#include "hierarchy.h"
 
 static int is_internal(const femlod_hierarchy *h, uint32_t x) { return x >= h->nv; }
 
@@ -97,6 +59,23 @@ static void face_off(femlod_hierarchy *h, uint32_t f) {
 
 static void work_push(femlod_hierarchy *h, uint32_t x) {
     if (h->collect && h->work_n < h->work_cap) h->work[h->work_n++] = x;
+}
+
+/* Front list and active faces from the node states, from scratch: a face is
+ * active iff its three corners are on the front (docs/design.md). */
+static void rebuild_sets(femlod_hierarchy *h) {
+    h->front_n = 0;
+    for (size_t x = 0; x < h->nn; x++) {
+        h->front_pos[x] = NONE;
+        if (h->state[x] == FRONT) front_add(h, (uint32_t)x);
+    }
+    h->active_n = 0;
+    for (size_t f = 0; f < h->nf; f++) {
+        const uint32_t *v = h->face_v + 3 * f;
+        h->active_pos[f] = NONE;
+        if (h->state[v[0]] == FRONT && h->state[v[1]] == FRONT && h->state[v[2]] == FRONT)
+            face_on(h, (uint32_t)f);
+    }
 }
 
 /* }====== */
@@ -138,7 +117,7 @@ static uint32_t front_above(const femlod_hierarchy *h, uint32_t x) {
  * depends on k. Every pushed node was born later than the one below it on
  * the stack, so the loop ends; an explicit stack keeps deep chains off the
  * C stack. Returns the number of splits. */
-static size_t force_split(femlod_hierarchy *h, uint32_t target) {
+size_t fl_hierarchy_force_split(femlod_hierarchy *h, uint32_t target) {
     size_t ops = 0, top = 0;
     h->stack[top++] = target;
     while (top > 0) {
@@ -167,7 +146,7 @@ static size_t force_split(femlod_hierarchy *h, uint32_t target) {
 
 /* Collapses k (above the front) after collapsing its children and vstars
  * that are still above the front; each of those was born before k. */
-static size_t force_collapse(femlod_hierarchy *h, uint32_t target) {
+size_t fl_hierarchy_force_collapse(femlod_hierarchy *h, uint32_t target) {
     size_t ops = 0, top = 0;
     h->stack[top++] = target;
     while (top > 0) {
@@ -221,6 +200,7 @@ void femlod_hierarchy_free(femlod_hierarchy *h) {
     free(h->stack);
     free(h->work);
     free(h->stamp);
+    free(h->index);
     free(h);
 }
 
@@ -310,6 +290,7 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
     h->work_cap = nn + 2 * nc + 1;
     h->work = fl_alloc(h->work_cap, sizeof(uint32_t));
     h->stamp = fl_calloc(nn, sizeof(uint32_t));
+    h->index = fl_alloc(nn, sizeof(uint32_t));
     in.cap = 3 * nf;
     in.head = fl_alloc(nn, sizeof(uint32_t));
     in.face = fl_alloc(in.cap, sizeof(uint32_t));
@@ -319,7 +300,7 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
     if (!h->pos || !h->e_size || !h->parent || !h->child || !h->depth || !h->vstar_start ||
         !h->vstars || !h->dep_start || !h->deps || !h->face_v || !h->removed_start ||
         !h->removed || !h->created_start || !h->state || !h->front || !h->front_pos ||
-        !h->active || !h->active_pos || !h->stack || !h->work || !h->stamp || !in.head ||
+        !h->active || !h->active_pos || !h->stack || !h->work || !h->stamp || !h->index || !in.head ||
         !in.face || !in.next || !dead || !seen) {
         st = fl_error(err, FEMLOD_ENOMEM, "out of memory building a hierarchy of %zu nodes", nn);
         goto done;
@@ -444,17 +425,15 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
     for (size_t x = nn; x-- > 0;)
         if (h->parent[x] != NONE) h->depth[x] = h->depth[h->parent[x]] + 1;
 
-    /* The first front: the simplification's result (every collapse applied). */
-    for (size_t x = 0; x < nn; x++) {
-        h->front_pos[x] = NONE;
-        h->state[x] = BELOW;
-    }
-    for (size_t x = 0; x < nn; x++)
-        if (h->parent[x] == NONE) front_add(h, (uint32_t)x);
-    for (size_t f = 0; f < nf; f++) {
-        h->active_pos[f] = NONE;
-        if (!dead[f]) face_on(h, (uint32_t)f);
-    }
+    /* The first front: the simplification's result (every collapse applied);
+     * its faces are the ones the replay left alive. */
+    for (size_t x = 0; x < nn; x++) h->state[x] = h->parent[x] == NONE ? FRONT : BELOW;
+    rebuild_sets(h);
+    for (size_t f = 0; f < nf; f++)
+        if ((h->active_pos[f] == NONE) != (dead[f] != 0)) {
+            st = fl_error(err, FEMLOD_EINPUT, "collapse log: face %zu outlives a corner", f);
+            goto done;
+        }
 
 done:
     free(in.head);
@@ -501,12 +480,15 @@ const uint32_t *femlod_hierarchy_front(const femlod_hierarchy *h, size_t *count)
 
 size_t femlod_hierarchy_bytes(const femlod_hierarchy *h) {
     size_t nn = h->nn, nc = h->nc, nf = h->nf;
-    size_t nvs = nc ? h->vstar_start[nc] : 0, nrem = nc ? h->removed_start[nc] : 0;
-    return sizeof *h + nn * (3 * sizeof(double) + sizeof(double) + 4 * sizeof(uint32_t) + 1 +
-                             2 * sizeof(uint32_t)) +
-           nc * (2 + 3) * sizeof(uint32_t) + 2 * nvs * sizeof(uint32_t) +
-           nf * (3 + 2) * sizeof(uint32_t) + nrem * sizeof(uint32_t) +
-           h->work_cap * sizeof(uint32_t);
+    size_t nvs = h->vstar_start[nc], nrem = h->removed_start[nc];
+    size_t per_node = 4 * sizeof(double)          /* pos, e_size */
+                      + 7 * sizeof(uint32_t) + 1; /* parent, depth, dep_start, front, front_pos,
+                                                     stack, stamp/index below; state */
+    return sizeof *h + nn * (per_node + 2 * sizeof(uint32_t)) +
+           nc * 5 * sizeof(uint32_t)            /* child, vstar/removed/created starts */
+           + 2 * nvs * sizeof(uint32_t)         /* vstars, dependents */
+           + nf * 5 * sizeof(uint32_t)          /* face corners, active, active_pos */
+           + nrem * sizeof(uint32_t) + h->work_cap * sizeof(uint32_t);
 }
 
 /* }====== */
@@ -521,7 +503,7 @@ femlod_status femlod_hierarchy_split(femlod_hierarchy *h, uint32_t node, size_t 
         return fl_error(err, FEMLOD_EINPUT, "node %u is an input vertex: it has no split", node);
     if (h->state[node] != FRONT)
         return fl_error(err, FEMLOD_EINPUT, "node %u is not on the front", node);
-    size_t n = force_split(h, node);
+    size_t n = fl_hierarchy_force_split(h, node);
     if (ops) *ops = n;
     return FEMLOD_OK;
 }
@@ -534,7 +516,7 @@ femlod_status femlod_hierarchy_collapse(femlod_hierarchy *h, uint32_t node, size
         return fl_error(err, FEMLOD_EINPUT, "node %u is an input vertex: it has no children to collapse", node);
     if (h->state[node] != ABOVE)
         return fl_error(err, FEMLOD_EINPUT, "node %u is already collapsed (on or below the front)", node);
-    size_t n = force_collapse(h, node);
+    size_t n = fl_hierarchy_force_collapse(h, node);
     if (ops) *ops = n;
     return FEMLOD_OK;
 }
@@ -569,7 +551,7 @@ femlod_status femlod_hierarchy_refine(femlod_hierarchy *h, double size, femlod_s
         double t;
         st = threshold(h, x, size, fn, payload, &t, err);
         if (st != FEMLOD_OK) break;
-        if (t < h->e_size[x]) done += force_split(h, x);
+        if (t < h->e_size[x]) done += fl_hierarchy_force_split(h, x);
     }
     h->collect = 0;
     h->work_n = 0;
@@ -597,7 +579,7 @@ femlod_status femlod_hierarchy_coarsen(femlod_hierarchy *h, double size, femlod_
         double t;
         st = threshold(h, k, size, fn, payload, &t, err);
         if (st != FEMLOD_OK) break;
-        if (h->e_size[k] <= t) done += force_collapse(h, k);
+        if (h->e_size[k] <= t) done += fl_hierarchy_force_collapse(h, k);
     }
     h->collect = 0;
     h->work_n = 0;
@@ -605,56 +587,115 @@ femlod_status femlod_hierarchy_coarsen(femlod_hierarchy *h, double size, femlod_
     return st;
 }
 
+/* Sorts n ids in place (LSD radix, three 11-bit digits): linear time, so
+ * extraction stays linear in the front while its order stays canonical. */
+static int radix_sort_u32(uint32_t *v, size_t n) {
+    if (n < 2) return 1;
+    uint32_t *tmp = fl_alloc(n, sizeof *tmp);
+    if (!tmp) return 0;
+    uint32_t *src = v, *dst = tmp;
+    for (int shift = 0; shift < 33; shift += 11) {
+        size_t count[2049] = {0};
+        for (size_t i = 0; i < n; i++) count[((src[i] >> shift) & 2047u) + 1]++;
+        for (size_t b = 0; b < 2048; b++) count[b + 1] += count[b];
+        for (size_t i = 0; i < n; i++) dst[count[(src[i] >> shift) & 2047u]++] = src[i];
+        uint32_t *t = src;
+        src = dst;
+        dst = t;
+    }
+    /* three passes: the result is in tmp */
+    memcpy(v, src, n * sizeof *v);
+    free(tmp);
+    return 1;
+}
+
 femlod_status femlod_hierarchy_extract(femlod_hierarchy *h, femlod_mesh **out, uint32_t **nodes,
                                        femlod_error *err) {
     assert(out);
-    femlod_hierarchy *w = h; /* only the scratch stamps change */
-    /* Vertices: front nodes in order of first use by the active faces. */
-    if (++w->epoch == 0) {
-        memset(w->stamp, 0, h->nn * sizeof(uint32_t));
-        w->epoch = 1;
+    size_t nt = h->active_n;
+    uint32_t *faces = fl_alloc(nt, sizeof(uint32_t));
+    uint32_t *verts = fl_alloc(h->front_n, sizeof(uint32_t));
+    if (!faces || !verts) goto nomem;
+    memcpy(faces, h->active, nt * sizeof(uint32_t));
+    if (++h->epoch == 0) {
+        memset(h->stamp, 0, h->nn * sizeof(uint32_t));
+        h->epoch = 1;
     }
     size_t nv = 0;
-    for (size_t a = 0; a < h->active_n; a++) {
-        const uint32_t *v = h->face_v + 3 * (size_t)h->active[a];
+    for (size_t a = 0; a < nt; a++) {
+        const uint32_t *v = h->face_v + 3 * (size_t)faces[a];
         for (int s = 0; s < 3; s++)
-            if (w->stamp[v[s]] != w->epoch) {
-                w->stamp[v[s]] = w->epoch;
-                nv++;
+            if (h->stamp[v[s]] != h->epoch) {
+                h->stamp[v[s]] = h->epoch;
+                verts[nv++] = v[s];
             }
     }
-    femlod_mesh *m = fl_mesh_alloc(nv, h->active_n);
-    uint32_t *ids = nodes ? fl_alloc(nv, sizeof(uint32_t)) : NULL;
-    uint32_t *index = fl_alloc(h->nn, sizeof(uint32_t)); /* only entries of front nodes are read */
-    if (!m || (nodes && !ids) || !index) {
-        femlod_mesh_free(m);
-        free(ids);
-        free(index);
-        return fl_error(err, FEMLOD_ENOMEM, "out of memory extracting %zu triangles", h->active_n);
+    if (!radix_sort_u32(faces, nt) || !radix_sort_u32(verts, nv)) goto nomem;
+    femlod_mesh *m = fl_mesh_alloc(nv, nt);
+    if (!m) goto nomem;
+    /* index[] is scratch: only the entries of the used nodes, written here,
+     * are read, so it never needs clearing. */
+    for (size_t i = 0; i < nv; i++) {
+        h->index[verts[i]] = (uint32_t)i;
+        memcpy(m->pos + 3 * i, h->pos + 3 * (size_t)verts[i], 3 * sizeof(double));
     }
-    if (++w->epoch == 0) {
-        memset(w->stamp, 0, h->nn * sizeof(uint32_t));
-        w->epoch = 1;
+    for (size_t a = 0; a < nt; a++)
+        for (int s = 0; s < 3; s++)
+            m->tri[3 * a + (size_t)s] = h->index[h->face_v[3 * (size_t)faces[a] + (size_t)s]];
+    free(faces);
+    *out = m;
+    if (nodes) {
+        *nodes = verts;
+    } else {
+        free(verts);
     }
-    size_t n = 0;
-    for (size_t a = 0; a < h->active_n; a++) {
-        const uint32_t *v = h->face_v + 3 * (size_t)h->active[a];
-        for (int s = 0; s < 3; s++) {
-            uint32_t x = v[s];
-            if (w->stamp[x] != w->epoch) {
-                w->stamp[x] = w->epoch;
-                index[x] = (uint32_t)n;
-                memcpy(m->pos + 3 * n, h->pos + 3 * (size_t)x, 3 * sizeof(double));
-                if (ids) ids[n] = x;
-                n++;
-            }
-            m->tri[3 * a + (size_t)s] = index[x];
+    return FEMLOD_OK;
+
+nomem:
+    free(faces);
+    free(verts);
+    return fl_error(err, FEMLOD_ENOMEM, "out of memory extracting %zu triangles", nt);
+}
+
+femlod_status fl_hierarchy_set_front(femlod_hierarchy *h, const uint32_t *nodes, size_t count,
+                                     femlod_error *err) {
+    /* Parents have larger ids than their children: walking down from the
+     * top, a node is below the front iff its parent is on or below it. */
+    memset(h->state, 0xFF, h->nn);
+    for (size_t i = 0; i < count; i++) {
+        if (nodes[i] >= h->nn)
+            return fl_error(err, FEMLOD_EPARSE, "front node %u does not exist", nodes[i]);
+        if (h->state[nodes[i]] == FRONT)
+            return fl_error(err, FEMLOD_EPARSE, "front node %u is listed twice", nodes[i]);
+        h->state[nodes[i]] = FRONT;
+    }
+    femlod_status st = FEMLOD_OK;
+    for (size_t x = h->nn; x-- > 0 && st == FEMLOD_OK;) {
+        uint32_t p = h->parent[x];
+        int parent_low = p != NONE && (h->state[p] == FRONT || h->state[p] == BELOW);
+        if (h->state[x] == FRONT) {
+            if (parent_low)
+                st = fl_error(err, FEMLOD_EPARSE, "front nodes %zu and its ancestor overlap", x);
+        } else if (parent_low) {
+            h->state[x] = BELOW;
+        } else if (!is_internal(h, (uint32_t)x)) {
+            st = fl_error(err, FEMLOD_EPARSE, "input vertex %zu is not covered by the front", x);
+        } else {
+            h->state[x] = ABOVE;
         }
     }
-    free(index);
-    *out = m;
-    if (nodes) *nodes = ids;
-    return FEMLOD_OK;
+    if (st == FEMLOD_OK) {
+        rebuild_sets(h);
+        femlod_error verr;
+        if (femlod_hierarchy_validate(h, &verr) != FEMLOD_OK)
+            st = fl_error(err, FEMLOD_EPARSE, "saved front is not valid: %s", verr.message);
+    }
+    if (st != FEMLOD_OK) {
+        /* Back to the simplification's result: every collapse applied. */
+        for (size_t x = 0; x < h->nn; x++) h->state[x] = h->parent[x] == NONE ? FRONT : BELOW;
+        rebuild_sets(h);
+    }
+    return st;
 }
 
 /* }====== */

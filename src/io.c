@@ -22,9 +22,11 @@ static const struct {
     {FEMLOD_FORMAT_PLY, "ply"},
     {FEMLOD_FORMAT_PLY_ASCII, "ply_ascii"},
     {FEMLOD_FORMAT_PLY_BINARY, "ply_binary"},
+    {FEMLOD_FORMAT_GLTF, "gltf"},
+    {FEMLOD_FORMAT_GLB, "glb"},
 };
 
-#define SUPPORTED_EXTENSIONS ".obj, .stl, .off, .ply"
+#define SUPPORTED_EXTENSIONS ".obj, .stl, .off, .ply, .gltf, .glb"
 
 const char *femlod_format_name(femlod_format format) {
     if (format == FEMLOD_FORMAT_AUTO) return "auto";
@@ -60,14 +62,16 @@ femlod_format femlod_format_from_path(const char *path) {
     } ext[] = {{"obj", FEMLOD_FORMAT_OBJ},
                {"stl", FEMLOD_FORMAT_STL},
                {"off", FEMLOD_FORMAT_OFF},
-               {"ply", FEMLOD_FORMAT_PLY}};
+               {"ply", FEMLOD_FORMAT_PLY},
+               {"gltf", FEMLOD_FORMAT_GLTF},
+               {"glb", FEMLOD_FORMAT_GLB}};
     for (size_t i = 0; i < sizeof ext / sizeof ext[0]; i++)
         if (equal_nocase(dot + 1, ext[i].ext)) return ext[i].format;
     return FEMLOD_FORMAT_AUTO;
 }
 
 static int format_valid(femlod_format f) {
-    return f >= FEMLOD_FORMAT_AUTO && f <= FEMLOD_FORMAT_PLY_BINARY;
+    return f >= FEMLOD_FORMAT_AUTO && f <= FEMLOD_FORMAT_GLB;
 }
 
 /* }====== */
@@ -90,9 +94,11 @@ static femlod_format resolve_format(femlod_format f, const char *name, femlod_er
     return f;
 }
 
-/* data[size] must be '\0' (the readers' contract). */
+/* data[size] must be '\0' (the readers' contract). file: where the data came
+ * from (glTF's external buffers are beside it), NULL for memory. */
 static femlod_status dispatch_read(femlod_mesh **out, const char *data, size_t size,
-                                   const char *name, femlod_format f, femlod_error *err) {
+                                   const char *name, femlod_format f, const char *file,
+                                   femlod_error *err) {
     switch (f) {
     case FEMLOD_FORMAT_OBJ: return fl_read_obj(out, data, size, name, err);
     case FEMLOD_FORMAT_STL:
@@ -103,6 +109,8 @@ static femlod_status dispatch_read(femlod_mesh **out, const char *data, size_t s
     case FEMLOD_FORMAT_PLY:
     case FEMLOD_FORMAT_PLY_ASCII:
     case FEMLOD_FORMAT_PLY_BINARY: return fl_read_ply(out, data, size, name, err);
+    case FEMLOD_FORMAT_GLTF:
+    case FEMLOD_FORMAT_GLB: return fl_read_gltf(out, data, size, name, file, f, err);
     case FEMLOD_FORMAT_AUTO: break;
     }
     return fl_error(err, FEMLOD_EINPUT, "%s: no format", name);
@@ -117,7 +125,7 @@ femlod_status femlod_mesh_read(femlod_mesh **out, const char *path,
     size_t size;
     femlod_status s = fl_file_read_all(path, &data, &size, err);
     if (s != FEMLOD_OK) return s;
-    s = dispatch_read(out, data, size, path, f, err);
+    s = dispatch_read(out, data, size, path, f, path, err);
     free(data);
     return s;
 }
@@ -137,7 +145,7 @@ femlod_status femlod_mesh_read_memory(femlod_mesh **out, const void *data, size_
         return fl_error(err, FEMLOD_ENOMEM, "%s: out of memory copying %zu bytes", name, size);
     if (size) memcpy(copy, data, size);
     copy[size] = '\0';
-    femlod_status s = dispatch_read(out, copy, size, name, f, err);
+    femlod_status s = dispatch_read(out, copy, size, name, f, NULL, err);
     free(copy);
     return s;
 }
@@ -151,9 +159,24 @@ femlod_status femlod_mesh_write(const femlod_mesh *mesh, const char *path,
     assert(mesh && path);
     femlod_format f = resolve_format(options ? options->format : FEMLOD_FORMAT_AUTO, path, err);
     if (f == FEMLOD_FORMAT_AUTO) return err ? err->status : FEMLOD_EINPUT;
+    int gltf = f == FEMLOD_FORMAT_GLTF || f == FEMLOD_FORMAT_GLB;
+    if (options && !gltf && (options->color_by || options->normals || options->extras))
+        return fl_error(err, FEMLOD_EINPUT,
+                        "%s: color_by, normals and extras are glTF options (format %s)", path,
+                        femlod_format_name(f));
     fl_out o;
     femlod_status s = fl_out_open(&o, path, err);
     if (s != FEMLOD_OK) return s;
+    if (gltf) {
+        /* "gltf" names the family, as "stl" does: GLB for a .glb name. */
+        int binary = f == FEMLOD_FORMAT_GLB || femlod_format_from_path(path) == FEMLOD_FORMAT_GLB;
+        s = fl_write_gltf(mesh, o.fp, binary, options, path, err);
+        if (s != FEMLOD_OK) {
+            fl_out_abort(&o);
+            return s;
+        }
+        return fl_out_commit(&o, err);
+    }
     errno = 0;
     switch (f) {
     case FEMLOD_FORMAT_OBJ: s = fl_write_obj(mesh, o.fp); break;
@@ -164,6 +187,8 @@ femlod_status femlod_mesh_write(const femlod_mesh *mesh, const char *path,
     case FEMLOD_FORMAT_PLY:
     case FEMLOD_FORMAT_PLY_BINARY: s = fl_write_ply(mesh, o.fp, 1); break;
     case FEMLOD_FORMAT_PLY_ASCII: s = fl_write_ply(mesh, o.fp, 0); break;
+    case FEMLOD_FORMAT_GLTF:
+    case FEMLOD_FORMAT_GLB: /* written above */
     case FEMLOD_FORMAT_AUTO: s = FEMLOD_EINPUT; break;
     }
     if (s != FEMLOD_OK) {

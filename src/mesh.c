@@ -294,7 +294,8 @@ static femlod_status subdivide_once(femlod_mesh **out, const femlod_mesh *in, fe
         const double *a = in->pos + 3 * (size_t)adj.edge_v[2 * e];
         const double *b = in->pos + 3 * (size_t)adj.edge_v[2 * e + 1];
         double *p = m->pos + 3 * (in->nv + e);
-        for (int k = 0; k < 3; k++) p[k] = 0.5 * (a[k] + b[k]);
+        /* halves first: no overflow near DBL_MAX, and the same value otherwise */
+        for (int k = 0; k < 3; k++) p[k] = 0.5 * a[k] + 0.5 * b[k];
     }
     for (size_t t = 0; t < in->nt; t++) {
         const uint32_t *c = in->tri + 3 * t;

@@ -6,19 +6,28 @@
  * by method-notes.md; docs/simplify.md maps each step to the functions here
  * and records the choices and the measurements behind them.
  *
- *   4.1 (1)-(4) quadrics        setup_quadrics, quadric.h (Garland and Heckbert,
- *                               SIGGRAPH 1997, plus line quadrics on features)
- *   4.1 2)-3) size, stretch     new_tri_check (squared forms, no sqrt to compare)
- *   4.2.1 candidates            evaluate: midpoint and robust optimum
- *                               (fl_quadric_optimum2), endpoints for fixed
- *                               vertices and feature lines
- *   4.2.2 validity C1-C4        evaluate / eval_candidate (cheap checks) and
- *                               expensive_checks (normal cones, after PMP's
- *                               decimation; max_deviation as PMP's Hausdorff
- *                               check; triangle intersections, intersect.c)
- *   4.2.2 pre-phase             phase 0 of simplify_run
- *   4.2.3 priority              rho = Sz_DIF * St_MIN * St_AVE in eval_candidate
- *   4.2 step 4 / 5.1 log        collapse, simplify_log.c
+ *   4.1 (1)-(4) quadrics        setup (planes, optionally area-weighted; line
+ *                               quadrics on feature edges weighted by
+ *                               sharpness) and quadric.h (Garland and
+ *                               Heckbert, SIGGRAPH 1997, plus line terms)
+ *   4.1 2)-3) size, stretch     eval_candidate (squared forms: no sqrt to
+ *                               compare), tri_stretch
+ *   4.2.1 candidates            evaluate (midpoint and the robust optimum,
+ *                               fl_quadric_optimum2; the fixed endpoint for
+ *                               corners, locks and feature lines) and
+ *                               evaluate_line (collapses along a feature line)
+ *   4.2.2 validity              gather (C4 valence, link condition, features,
+ *                               locks), eval_candidate (C1 tolerance, C2
+ *                               stretch, C3 size, turn against the current
+ *                               mesh), expensive_checks at pop time:
+ *                               cone_check (turn against the input surface,
+ *                               PMP's normal cones), deviation_check
+ *                               (max_deviation, PMP's Hausdorff tracking),
+ *                               intersect_check (intersect.c)
+ *   4.2.2 pre-phase             simplify_run, phase 0
+ *   4.2.3 priority              rho = Sz_DIF * St_MIN * St_AVE, eval_candidate;
+ *                               the queue: run_queue, reevaluate_ring, heap.c
+ *   4.2 step 4, 5.1 log         collapse, log_collapse, simplify_log.c
  *
  * Topology (link condition, Dey et al., "Topology preserving edge
  * contraction", 1999; the tetrahedron and handle cases as in OpenMesh's
@@ -37,6 +46,7 @@
 #include "quadric.h"
 #include "simplify_log.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -55,23 +65,29 @@
 #ifndef FEMLOD_SIMPLIFY_SZDIF_RING
 #define FEMLOD_SIMPLIFY_SZDIF_RING 1 /* Sz_DIF over every triangle at i or j */
 #endif
-#ifndef FL_NO_CONE
-#define FL_NO_CONE 0
-#endif
 #ifndef FEMLOD_SIMPLIFY_EIGEN_REL
 #define FEMLOD_SIMPLIFY_EIGEN_REL 1e-3 /* eigen directions kept in the optimum */
 #endif
 #ifndef FEMLOD_SIMPLIFY_LINE_TURN
 #define FEMLOD_SIMPLIFY_LINE_TURN 20.0 /* degrees: a feature line this straight takes midpoints */
 #endif
-#ifndef FEMLOD_SIMPLIFY_LAZY
-#define FEMLOD_SIMPLIFY_LAZY 0
+#ifndef FEMLOD_SIMPLIFY_BOUND
+#define FEMLOD_SIMPLIFY_BOUND 1 /* exact lazy re-evaluation with upper bounds (0: eager) */
 #endif
 #ifndef FEMLOD_SIMPLIFY_USE_OPTIMUM
 #define FEMLOD_SIMPLIFY_USE_OPTIMUM 1
 #endif
-#ifndef FEMLOD_SIMPLIFY_OPT_WHEN_MID_FAILS
-#define FEMLOD_SIMPLIFY_OPT_WHEN_MID_FAILS 1
+/* -DFEMLOD_SIMPLIFY_STATS=1: count the work (evaluations, checks, grid
+ * visits) per run in simp.stats and print it to stderr; for measurements
+ * only (docs/simplify.md). No global state: the counters live in the run. */
+#ifndef FEMLOD_SIMPLIFY_STATS
+#define FEMLOD_SIMPLIFY_STATS 0
+#endif
+#if FEMLOD_SIMPLIFY_STATS
+#include <stdio.h>
+#define STAT(x) ((void)(S->stats.x++))
+#else
+#define STAT(x) ((void)0)
 #endif
 
 /* vertex flags */
@@ -85,7 +101,10 @@ enum {
 enum {
     E_FEATURE = 1,
     E_DEAD = 2,
-    E_TOLFAIL = 4 /* last evaluation: every candidate failed C1 only; stays so while i and j do */
+    E_TOLFAIL = 4, /* last evaluation: every candidate failed C1 only; stays so while i and j do */
+    E_STALE = 8,   /* queued with an upper bound of its priority (bound_edge), not the priority */
+    E_OPT = 16,    /* eopt holds the edge's optimum candidate, or E_OPTC is clear: none (make_candidates) */
+    E_OPTC = 32
 };
 
 /* candidate modes */
@@ -99,7 +118,6 @@ enum {
 #define NO_REASON (-1)
 #define MAX_VSTARS 253
 
-static size_t dbg_evals, dbg_pops, dbg_exp, dbg_retry, dbg_items, dbg_tt, dbg_cells;
 typedef struct ring {
     uint32_t e, i, j;
     size_t n, cap;   /* surviving faces of i and j: the new triangles (k, a, b) */
@@ -123,6 +141,10 @@ typedef struct ring {
     int tolfail;     /* every candidate failed C1 and nothing else before it */
 } ring;
 
+typedef struct simp_stats {
+    size_t evals, settles, bounds, rings, cands, cand_ok, solves, pops, links, expensive, cells, items, tritri, skipped;
+} simp_stats;
+
 typedef struct simp {
     /* resolved thresholds */
     size_t target;
@@ -130,8 +152,6 @@ typedef struct simp {
     int maxval, keep_boundary, area_w;
     int tol_on, dev_on, st_on, sz_on, val_on, cone_on;
     double minst2, maxsz2, cos_nc, cos_nc2, maxdev2, eps;
-    int szdif_ring; /* Sz_DIF over every triangle at i or j (1) or the edge's two (0) */
-    int opt_when_mid_fails;
 
     /* vertices: slot s holds input vertex node[s] at first (Morton order) */
     size_t nv;
@@ -149,10 +169,12 @@ typedef struct simp {
     size_t nrefs, caprefs;
 
     /* faces */
-    size_t nt, live;
+    size_t nt, live, nt_in;
     uint32_t *tri, *tedge;
+    uint32_t *fin; /* input triangle index of each face slot */
     float *fn;   /* unit normal (0 for degenerate) */
     float *fsz;  /* longest edge */
+    double *finv; /* 1 / fsz, for Sz_DIF */
     float *cone; /* axis xyz, half-angle (radians) */
     uint32_t *fmark;
     uint32_t *fpt; /* deviation: first removed input vertex assigned to the face */
@@ -164,6 +186,8 @@ typedef struct simp {
     uint16_t *enf;
     uint8_t *eflag;
     uint32_t *emark;
+    double *eopt;    /* per edge: the optimum candidate (E_OPT) */
+    uint32_t *ehint; /* per edge and candidate (make_candidates order, first two): see eval_candidate */
 
     fl_heap heap;
     fl_grid grid;
@@ -191,6 +215,9 @@ typedef struct simp {
     size_t collapses, prephase;
     size_t rejected[FEMLOD_REJECT_COUNT];
     int oom;
+#if FEMLOD_SIMPLIFY_STATS
+    simp_stats stats;
+#endif
 } simp;
 
 /* {====== small vector helpers */
@@ -198,6 +225,10 @@ typedef struct simp {
 /* fmin/fmax are calls (NaN rules); no NaN reaches these */
 static inline double mn(double a, double b) { return a < b ? a : b; }
 static inline double mx(double a, double b) { return a > b ? a : b; }
+static inline uint32_t min3u(const uint32_t t[3]) {
+    uint32_t m = t[0] < t[1] ? t[0] : t[1];
+    return m < t[2] ? m : t[2];
+}
 
 static inline void sub3(double r[3], const double a[3], const double b[3]) {
     r[0] = a[0] - b[0]; r[1] = a[1] - b[1]; r[2] = a[2] - b[2];
@@ -254,6 +285,7 @@ static void face_update_cache(simp *S, uint32_t f) {
     for (int k = 0; k < 3; k++) S->fn[3 * (size_t)f + k] = l > 0 ? (float)(n[k] / l) : 0.0f;
     double L2 = mx(dot3(e1, e1), mx(dot3(e2, e2), dist2(b, c)));
     S->fsz[f] = (float)sqrt(L2);
+    S->finv[f] = 1.0 / (double)S->fsz[f];
 }
 
 static inline int face_alive(const simp *S, uint32_t f) { return S->tri[3 * (size_t)f] != UINT32_MAX; }
@@ -342,8 +374,6 @@ static uint32_t next_fstamp(simp *S) {
 
 /* {====== gather: the position-independent part of an edge's evaluation */
 
-static inline int is_line(const simp *S, uint32_t v) { return S->fdeg[v] == 2 && !(S->vflag[v] & V_FIXED); }
-
 /* Returns NO_REASON when the edge may be collapsed (position aside) and
  * fills R; otherwise the reason. */
 static int gather(simp *S, ring *R, uint32_t e) {
@@ -380,7 +410,6 @@ static int gather(simp *S, ring *R, uint32_t e) {
     } else {
         R->mode = M_FREE;
     }
-    (void)is_line;
 
     /* C4 (method-notes "Valid edges"): val(i) + val(j) - 4 interior, - 3 boundary. */
     int boundary_edge = nf == 1;
@@ -391,57 +420,78 @@ static int gather(simp *S, ring *R, uint32_t e) {
     if (S->val_on && newval > S->maxval) return FEMLOD_REJECT_VALENCE;
     if (newval < (boundary_edge ? 2 : 3) || newval > MAX_VSTARS - 2) return FEMLOD_REJECT_TOPOLOGY;
 
+    STAT(rings);
     size_t need = (size_t)S->fcount[i] + S->fcount[j];
     if (!ring_reserve(R, need)) {
         S->oom = 1;
         return FEMLOD_REJECT_TOPOLOGY;
     }
+    /* Sz_DIF (4.2.3) over every face at i or j (FEMLOD_SIMPLIFY_SZDIF_RING)
+     * or the edge's own, summed in list order */
     double szsum = 0.0;
     size_t szn = 0;
-    double stmin = 2.0;
+    size_t n = 0, ns = 0;
     for (int side = 0; side < 2; side++) {
         uint32_t v = side ? j : i, o = side ? i : j;
         const uint32_t *fl = S->refs + S->fstart[v];
         uint32_t cnt = S->fcount[v];
+        if (FEMLOD_SIMPLIFY_SZDIF_RING) szn += cnt;
         for (uint32_t m = 0; m < cnt; m++) {
             uint32_t f = fl[m];
             const uint32_t *t = S->tri + 3 * (size_t)f;
-            int c = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
-            uint32_t a = t[(c + 1) % 3], b = t[(c + 2) % 3];
-            if (S->szdif_ring) {
-                szsum += 1.0 / (double)S->fsz[f];
-                szn++;
+            uint32_t t0 = t[0], t1 = t[1], t2 = t[2], a, b;
+            if (t0 == v) {
+                a = t1;
+                b = t2;
+            } else if (t1 == v) {
+                a = t2;
+                b = t0;
+            } else {
+                a = t0;
+                b = t1;
             }
-            if (S->phase == 0 && (side == 0 || (a != o && b != o))) {
-                double st = tri_stretch(P(S, t[0]), P(S, t[1]), P(S, t[2]), NULL);
-                if (st < stmin) stmin = st;
-            }
+            if (FEMLOD_SIMPLIFY_SZDIF_RING) szsum += S->finv[f];
             if (a == o || b == o) {
                 if (side == 0) {
-                    if (R->ns == 2) return FEMLOD_REJECT_TOPOLOGY;
-                    R->sface[R->ns] = f;
-                    R->sopp[R->ns] = a == o ? b : a;
-                    R->ns++;
-                    if (!S->szdif_ring) {
-                        szsum += 1.0 / (double)S->fsz[f];
+                    if (ns == 2) return FEMLOD_REJECT_TOPOLOGY;
+                    R->sface[ns] = f;
+                    R->sopp[ns] = a == o ? b : a;
+                    ns++;
+                    if (!FEMLOD_SIMPLIFY_SZDIF_RING) {
+                        szsum += S->finv[f];
                         szn++;
                     }
                 }
                 continue;
             }
-            size_t r = R->n++;
-            R->face[r] = f;
-            R->a[r] = a;
-            R->b[r] = b;
-            R->from_j[r] = (uint8_t)side;
-            R->lab2[r] = dist2(P(S, a), P(S, b));
-            R->lab[r] = sqrt(R->lab2[r]);
+            R->face[n] = f;
+            R->a[n] = a;
+            R->b[n] = b;
+            R->from_j[n] = (uint8_t)side;
+            n++;
         }
     }
+    R->n = n;
+    R->ns = ns;
     if (R->ns != nf) return FEMLOD_REJECT_TOPOLOGY;
     if (R->ns == 2 && R->sopp[0] == R->sopp[1]) return FEMLOD_REJECT_TOPOLOGY;
     R->szdif = szn ? szsum / (double)szn : 1.0;
-    R->st_removed = stmin;
+    if (S->phase == 0) {
+        /* pre-phase: the least stretch among the faces the collapse removes
+         * or changes */
+        double stmin = 2.0;
+        for (int side = 0; side < 2; side++) {
+            uint32_t v = side ? j : i, o = side ? i : j;
+            const uint32_t *fl = S->refs + S->fstart[v];
+            for (uint32_t m = 0; m < S->fcount[v]; m++) {
+                const uint32_t *t = S->tri + 3 * (size_t)fl[m];
+                if (side == 1 && (t[0] == o || t[1] == o || t[2] == o)) continue;
+                double st = tri_stretch(P(S, t[0]), P(S, t[1]), P(S, t[2]), NULL);
+                if (st < stmin) stmin = st;
+            }
+        }
+        R->st_removed = stmin;
+    }
 
     /* the opposite vertices lose a neighbour: keep them at least triangular */
     for (size_t s = 0; s < R->ns; s++) {
@@ -459,9 +509,16 @@ static int gather(simp *S, ring *R, uint32_t e) {
         if (nfeat == 2) return FEMLOD_REJECT_TOPOLOGY;
     }
 
-    /* Link condition: the common neighbours of i and j are exactly the
-     * opposite vertices of the faces on the edge (no handle pinched, no
-     * duplicate face, no tetrahedron closed). */
+    return NO_REASON;
+}
+
+/* Link condition (Dey et al. 1999): the common neighbours of i and j are
+ * exactly the opposite vertices of the faces on the edge: no handle pinched,
+ * no duplicate face, no tetrahedron closed. It depends on the ring only, not
+ * on the position, and fails rarely: it is checked when an edge is popped,
+ * not at every evaluation (measured: a fifth of the evaluation time). */
+static int link_check(simp *S, const ring *R) {
+    STAT(links);
     uint32_t mi = next_stamp(S);
     uint32_t mj = next_stamp(S);
     for (size_t r = 0; r < R->n; r++)
@@ -496,39 +553,70 @@ static int gather(simp *S, ring *R, uint32_t e) {
 
 /* {====== candidates: C1-C3, foldover against the current mesh, priority */
 
-static int eval_candidate(simp *S, ring *R, const double p[3], double *rho) {
+/* The new triangle (p, a_r, b_r) of ring face r: C3 size, degeneracy,
+ * turn against the face it replaces, C2 stretch (phase 1). On success *st
+ * is its stretch, clamped to 1. The one place these are computed: the
+ * priority and its upper bound (bound_edge) must agree bit for bit. */
+static inline int tri_eval(const simp *S, const ring *R, size_t r, const double p[3], double *st_out) {
+    const double *a = P(S, R->a[r]), *b = P(S, R->b[r]);
+    double ea[3], eb[3], n[3];
+    sub3(ea, a, p);
+    sub3(eb, b, p);
+    double la2 = dot3(ea, ea), lb2 = dot3(eb, eb), lab2 = R->lab2[r];
+    double L2 = mx(la2, mx(lb2, lab2));
+    if (S->sz_on && L2 > S->maxsz2) return FEMLOD_REJECT_SIZE;
+    cross3(n, ea, eb);
+    double n2 = dot3(n, n);
+    if (!(n2 > 0.0)) return FEMLOD_REJECT_STRETCH;
+    /* foldover: the normal may not flip nor turn past max_normal_change */
+    const float *fo = S->fn + 3 * (size_t)R->face[r];
+    double d = n[0] * fo[0] + n[1] * fo[1] + n[2] * fo[2];
+    if (fo[0] != 0.0f || fo[1] != 0.0f || fo[2] != 0.0f) {
+        if (d <= 0.0) return FEMLOD_REJECT_FOLDOVER;
+        if (S->cos_nc > 0.0 && d * d < S->cos_nc2 * n2) return FEMLOD_REJECT_FOLDOVER;
+    }
+    /* C2: St = sqrt(3) |n| / (s L), compared squared */
+    double s = 0.5 * (sqrt(la2) + sqrt(lb2) + R->lab[r]);
+    double den = s * s * L2;
+    double st2 = 3.0 * n2 / den;
+    if (S->phase == 1 && S->st_on && st2 < S->minst2) return FEMLOD_REJECT_STRETCH;
+    double st = sqrt(st2);
+    if (st > 1.0) st = 1.0;
+    *st_out = st;
+    return NO_REASON;
+}
+
+/* |a - b| of ring face r (squared and not). */
+static inline void ring_length(const simp *S, ring *R, size_t r) {
+    R->lab2[r] = dist2(P(S, R->a[r]), P(S, R->b[r]));
+    R->lab[r] = sqrt(R->lab2[r]);
+}
+
+/* C1, then every new triangle; *hint gets the face of the failing or the
+ * least-stretch triangle (for bound_edge), UINT32_MAX when none. */
+static int eval_candidate(simp *S, ring *R, const double p[3], double *rho, uint32_t *hint) {
+    STAT(cands);
+    *hint = UINT32_MAX;
     const fl_quadric *qi = S->q + R->i, *qj = S->q + R->j;
     if (S->tol_on && fl_quadric_eval2(qi, qj, p) > S->tol) return FEMLOD_REJECT_TOLERANCE;
     double stsum = 0.0, stmin = 2.0;
+    size_t rmin = 0;
     for (size_t r = 0; r < R->n; r++) {
-        const double *a = P(S, R->a[r]), *b = P(S, R->b[r]);
-        double ea[3], eb[3], n[3];
-        sub3(ea, a, p);
-        sub3(eb, b, p);
-        double la2 = dot3(ea, ea), lb2 = dot3(eb, eb), lab2 = R->lab2[r];
-        double L2 = mx(la2, mx(lb2, lab2));
-        if (S->sz_on && L2 > S->maxsz2) return FEMLOD_REJECT_SIZE;
-        cross3(n, ea, eb);
-        double n2 = dot3(n, n);
-        if (!(n2 > 0.0)) return FEMLOD_REJECT_STRETCH;
-        /* foldover: the normal may not flip nor turn past max_normal_change */
-        const float *fo = S->fn + 3 * (size_t)R->face[r];
-        double d = n[0] * fo[0] + n[1] * fo[1] + n[2] * fo[2];
-        if (fo[0] != 0.0f || fo[1] != 0.0f || fo[2] != 0.0f) {
-            if (d <= 0.0) return FEMLOD_REJECT_FOLDOVER;
-            if (S->cos_nc > 0.0 && d * d < S->cos_nc2 * n2) return FEMLOD_REJECT_FOLDOVER;
+        double st = 0.0;
+        int w = tri_eval(S, R, r, p, &st);
+        if (w != NO_REASON) {
+            *hint = R->face[r];
+            return w;
         }
-        /* C2: St = sqrt(3) |n| / (s L), compared squared */
-        double s = 0.5 * (sqrt(la2) + sqrt(lb2) + R->lab[r]);
-        double den = s * s * L2;
-        double st2 = 3.0 * n2 / den;
-        if (S->phase == 1 && S->st_on && st2 < S->minst2) return FEMLOD_REJECT_STRETCH;
-        double st = sqrt(st2);
-        if (st > 1.0) st = 1.0;
         stsum += st;
-        if (st < stmin) stmin = st;
+        if (st < stmin) {
+            stmin = st;
+            rmin = r;
+        }
     }
+    if (R->n) *hint = R->face[rmin];
     if (S->phase == 0 && !(stmin > R->st_removed)) return FEMLOD_REJECT_STRETCH;
+    STAT(cand_ok);
     double stavg = R->n ? stsum / (double)R->n : 1.0;
     if (!R->n) stmin = 1.0;
     /* 4.2.3: rho = Sz_DIF * St_MIN * St_AVE (tau_SZ is a common factor) */
@@ -552,40 +640,91 @@ static uint32_t line_neighbour(const simp *S, uint32_t v, uint32_t e) {
     return UINT32_MAX;
 }
 
-/* A collapse along a feature line (method-notes "Optimal position": a
- * vertex on one feature line may only move along it). The endpoints lie on
- * the line exactly; the midpoint only where the line is straight (the
- * neighbouring feature edges continue the edge within about 1 degree):
- * elsewhere it would cut the corner of a curved line, and repeated
- * collapses would shrink it. Returns the best priority. */
-static double evaluate_line(simp *S, ring *R) {
+/* The candidate positions of the gathered edge (method-notes "Optimal
+ * position"), into R->cand, the preferred first (ties keep the earlier):
+ *   M_KEEP_*: the fixed endpoint;
+ *   M_LINE: a collapse along a feature line (a vertex on one feature line
+ *     may only move along it): the endpoints lie on the line exactly; the
+ *     midpoint comes first, but only where the line is straight (the
+ *     neighbouring feature edges continue the edge within
+ *     FEMLOD_SIMPLIFY_LINE_TURN degrees): elsewhere it would cut the corner
+ *     of a curved line, and repeated collapses would shrink it;
+ *   M_FREE: the midpoint and the robust optimum. */
+static void make_candidates(simp *S, ring *R) {
     const double *pi = P(S, R->i), *pj = P(S, R->j);
-    uint32_t oi = line_neighbour(S, R->i, R->e), oj = line_neighbour(S, R->j, R->e);
-    int straight = 0;
-    if (oi != UINT32_MAX && oj != UINT32_MAX) {
-        double u[3], a[3], b[3];
-        sub3(u, pj, pi);
-        sub3(a, pi, P(S, oi));
-        sub3(b, P(S, oj), pj);
-        double uu = dot3(u, u), ua = dot3(u, a), ub = dot3(u, b);
-        const double cl = cos(FEMLOD_SIMPLIFY_LINE_TURN * PI / 180.0), c2 = cl * cl;
-        straight = ua > 0 && ub > 0 && ua * ua >= c2 * uu * dot3(a, a) && ub * ub >= c2 * uu * dot3(b, b);
+    if (R->mode == M_KEEP_I || R->mode == M_KEEP_J) {
+        memcpy(R->cand[0], R->mode == M_KEEP_I ? pi : pj, sizeof R->cand[0]);
+        R->ncand = 1;
+        return;
     }
-    int n = 0;
-    if (straight) {
-        for (int k = 0; k < 3; k++) R->cand[n][k] = 0.5 * (pi[k] + pj[k]);
-        n++;
+    if (R->mode == M_LINE) {
+        uint32_t oi = line_neighbour(S, R->i, R->e), oj = line_neighbour(S, R->j, R->e);
+        int straight = 0;
+        if (oi != UINT32_MAX && oj != UINT32_MAX) {
+            double u[3], a[3], b[3];
+            sub3(u, pj, pi);
+            sub3(a, pi, P(S, oi));
+            sub3(b, P(S, oj), pj);
+            double uu = dot3(u, u), ua = dot3(u, a), ub = dot3(u, b);
+            const double cl = cos(FEMLOD_SIMPLIFY_LINE_TURN * PI / 180.0), c2 = cl * cl;
+            straight = ua > 0 && ub > 0 && ua * ua >= c2 * uu * dot3(a, a) && ub * ub >= c2 * uu * dot3(b, b);
+        }
+        int n = 0;
+        if (straight) {
+            for (int k = 0; k < 3; k++) R->cand[n][k] = 0.5 * (pi[k] + pj[k]);
+            n++;
+        }
+        memcpy(R->cand[n++], pi, 3 * sizeof *pi);
+        memcpy(R->cand[n++], pj, 3 * sizeof *pj);
+        R->ncand = n;
+        return;
     }
-    memcpy(R->cand[n++], pi, 3 * sizeof *pi);
-    memcpy(R->cand[n++], pj, 3 * sizeof *pj);
-    R->ncand = n;
+    double *mid = R->cand[0];
+    for (int k = 0; k < 3; k++) mid[k] = 0.5 * (pi[k] + pj[k]);
+    R->ncand = 1;
+    if (FEMLOD_SIMPLIFY_USE_OPTIMUM) {
+        /* cached while i and j keep their positions and quadrics (cleared
+         * for the edges at k after each collapse, reevaluate_ring) */
+        uint8_t *fl = S->eflag + R->e;
+        double *opt = S->eopt + 3 * (size_t)R->e;
+        if (!(*fl & E_OPT)) {
+            STAT(solves);
+            int kept = fl_quadric_optimum2(S->q + R->i, S->q + R->j, mid, FEMLOD_SIMPLIFY_EIGEN_REL, opt);
+            /* an optimum farther than the edge length from the midpoint is
+             * the sign of a near-singular system, not a better position */
+            int use = kept > 0 && dist2(opt, mid) <= dist2(pi, pj) && dist2(opt, mid) > 0.0;
+            *fl = (uint8_t)((*fl & ~E_OPTC) | E_OPT | (use ? E_OPTC : 0));
+        }
+        if (*fl & E_OPTC) {
+            memcpy(R->cand[1], opt, 3 * sizeof *opt);
+            R->ncand = 2;
+        }
+    }
+}
+
+/* Full cheap evaluation: returns the best priority (< 0 when no candidate is
+ * valid) and leaves the candidates in R, the best valid one first. */
+static double evaluate(simp *S, ring *R, uint32_t e) {
+    STAT(evals);
+    R->ncand = 0;
+    R->tolfail = 0;
+    int why = gather(S, R, e);
+    if (why != NO_REASON) {
+        S->rejected[why]++;
+        R->reason = why;
+        return -1.0;
+    }
+    make_candidates(S, R);
+    for (size_t r = 0; r < R->n; r++) ring_length(S, R, r);
     double best = -1.0;
     int bi = -1, w = NO_REASON, alltol = 1;
-    for (int c = 0; c < n; c++) {
-        w = eval_candidate(S, R, R->cand[c], &R->rho[c]);
+    for (int c = 0; c < R->ncand; c++) {
+        uint32_t h;
+        w = eval_candidate(S, R, R->cand[c], &R->rho[c], &h);
+        if (c < 2) S->ehint[2 * (size_t)e + c] = h;
         R->ok[c] = w == NO_REASON;
         alltol &= w == FEMLOD_REJECT_TOLERANCE;
-        if (R->ok[c] && R->rho[c] > best) { /* ties keep the earlier: midpoint, then i */
+        if (R->ok[c] && R->rho[c] > best) { /* ties keep the earlier */
             best = R->rho[c];
             bi = c;
         }
@@ -604,82 +743,71 @@ static double evaluate_line(simp *S, ring *R) {
     if (best < 0.0) {
         S->rejected[w]++;
         R->reason = w;
-        R->tolfail = alltol;
+        R->tolfail = alltol; /* every candidate failed C1, which depends on i and j only */
     }
     return best;
 }
 
-/* Full cheap evaluation: returns the best priority (< 0 when no candidate is
- * valid) and leaves the candidates in R, best first among valid ones. */
-static double evaluate(simp *S, ring *R, uint32_t e) {
-    dbg_evals++;
+/* An upper bound of the priority evaluate would give an edge away from the
+ * last collapse's vertex k, for the lazy queue (docs/simplify.md "Exact lazy
+ * re-evaluation"): the edge's endpoints, hence its candidates and their
+ * quadric errors, are unchanged; of its new triangles only those with
+ * corner k changed. Exact in what it decides: returns < 0, with R->tolfail
+ * set as evaluate would set it, when evaluate would find no valid
+ * candidate by the checks it runs (topology and valence, C1, and the
+ * per-triangle checks of the triangles at k); otherwise a value >= the
+ * priority evaluate would return: rho = Sz_DIF * St_MIN * St_AVE with the
+ * stretch of every triangle not at k replaced by 1, its upper limit (the
+ * products, sum and quotient are monotone under rounding, so the bound
+ * holds in floating point too). */
+static double bound_edge(simp *S, ring *R, uint32_t e, uint32_t k) {
+    STAT(bounds);
     R->ncand = 0;
     R->tolfail = 0;
     int why = gather(S, R, e);
     if (why != NO_REASON) {
         S->rejected[why]++;
-        R->reason = why;
         return -1.0;
     }
-    const double *pi = P(S, R->i), *pj = P(S, R->j);
-    double best = -1.0;
-    if (R->mode == M_KEEP_I || R->mode == M_KEEP_J) {
-        const double *p = R->mode == M_KEEP_I ? pi : pj;
-        memcpy(R->cand[0], p, sizeof R->cand[0]);
-        R->ncand = 1;
-        int w = eval_candidate(S, R, p, &R->rho[0]);
-        R->ok[0] = w == NO_REASON;
-        if (R->ok[0]) best = R->rho[0];
-        else {
-            R->tolfail = w == FEMLOD_REJECT_TOLERANCE;
-            S->rejected[w]++;
-            R->reason = w;
+    make_candidates(S, R);
+    const fl_quadric *qi = S->q + R->i, *qj = S->q + R->j;
+    /* the triangles the bound evaluates: at k, or the last evaluation's
+     * least-stretch or failing one (ehint) */
+    uint32_t h0 = S->ehint[2 * (size_t)e], h1 = R->ncand > 1 ? S->ehint[2 * (size_t)e + 1] : UINT32_MAX;
+    for (size_t r = 0; r < R->n; r++)
+        if (R->a[r] == k || R->b[r] == k || R->face[r] == h0 || R->face[r] == h1) ring_length(S, R, r);
+    double ub = -1.0;
+    int alltol = 1, w = NO_REASON;
+    for (int c = 0; c < R->ncand; c++) {
+        const double *p = R->cand[c];
+        if (S->tol_on && fl_quadric_eval2(qi, qj, p) > S->tol) {
+            w = FEMLOD_REJECT_TOLERANCE;
+            continue;
         }
-        return best;
-    }
-    if (R->mode == M_LINE) return evaluate_line(S, R);
-    double mid[3];
-    for (int k = 0; k < 3; k++) mid[k] = 0.5 * (pi[k] + pj[k]);
-    memcpy(R->cand[0], mid, sizeof mid);
-    int w0 = eval_candidate(S, R, mid, &R->rho[0]);
-    R->ok[0] = w0 == NO_REASON;
-    R->ncand = 1;
-    int w1 = NO_REASON;
-    if (FEMLOD_SIMPLIFY_USE_OPTIMUM && (R->ok[0] || S->opt_when_mid_fails)) {
-        double opt[3];
-        int kept = fl_quadric_optimum2(S->q + R->i, S->q + R->j, mid, FEMLOD_SIMPLIFY_EIGEN_REL, opt);
-        /* an optimum farther than the edge length from the midpoint is the
-         * sign of a near-singular system, not a better position */
-        if (kept > 0 && dist2(opt, mid) <= dist2(pi, pj) && dist2(opt, mid) > 0.0) {
-            memcpy(R->cand[1], opt, sizeof opt);
-            w1 = eval_candidate(S, R, opt, &R->rho[1]);
-            R->ok[1] = w1 == NO_REASON;
-            R->ncand = 2;
+        alltol = 0;
+        double stmin = 1.0, stsum = 0.0;
+        int bad = 0;
+        uint32_t h = c < 2 ? S->ehint[2 * (size_t)e + c] : UINT32_MAX;
+        for (size_t r = 0; r < R->n && !bad; r++) {
+            if (R->a[r] != k && R->b[r] != k && R->face[r] != h) {
+                stsum += 1.0;
+                continue;
+            }
+            double st = 0.0;
+            w = tri_eval(S, R, r, p, &st);
+            if (w != NO_REASON) bad = 1;
+            stsum += st;
+            if (st < stmin) stmin = st;
         }
+        if (bad) continue;
+        double b = R->n ? R->szdif * stmin * (stsum / (double)R->n) : R->szdif;
+        if (b > ub) ub = b;
     }
-    if (R->ok[0]) best = R->rho[0];
-    if (R->ncand == 2 && R->ok[1] && R->rho[1] > best) {
-        /* the optimum is strictly better: put it first (ties keep the midpoint) */
-        double t[3];
-        memcpy(t, R->cand[0], sizeof t);
-        memcpy(R->cand[0], R->cand[1], sizeof t);
-        memcpy(R->cand[1], t, sizeof t);
-        double tr = R->rho[0];
-        R->rho[0] = R->rho[1];
-        R->rho[1] = tr;
-        int to = R->ok[0];
-        R->ok[0] = R->ok[1];
-        R->ok[1] = to;
-        best = R->rho[0];
-    }
-    if (best < 0.0) {
-        int w = R->ncand == 2 ? w1 : w0;
-        if (w0 == FEMLOD_REJECT_TOLERANCE && (R->ncand == 1 || w1 == FEMLOD_REJECT_TOLERANCE))
-            R->tolfail = 1;
+    if (ub < 0.0) {
         S->rejected[w]++;
-        R->reason = w;
+        R->tolfail = alltol;
     }
-    return best;
+    return ub;
 }
 
 /* }====== */
@@ -813,7 +941,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
         for (int y = c0[1]; y <= c1[1]; y++)
             for (int x = c0[0]; x <= c1[0]; x++) {
                 size_t cell = fl_grid_cell(&S->grid, x, y, z);
-                dbg_cells++;
+                STAT(cells);
                 uint32_t cnt = S->grid.count[cell];
                 uint32_t blk = S->grid.head[cell];
                 uint32_t lim = cnt ? (cnt - 1) % FL_GRID_BLOCK + 1 : 0;
@@ -821,7 +949,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                     const fl_grid_block *B = S->grid.blocks + blk;
                     for (uint32_t s = 0; s < lim; s++) {
                         uint32_t f = B->item[s];
-                        dbg_items++;
+                        STAT(items);
                         if (S->fmark[f] == ex) continue; /* being replaced, or met */
                         S->fmark[f] = ex;
                         const uint32_t *t = S->tri + 3 * (size_t)f;
@@ -841,7 +969,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                                 continue;
                             const double *T[3] = {p, P(S, R->a[r]), P(S, R->b[r])};
                             uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
-                            dbg_tt++;
+                            STAT(tritri);
                             if (fl_tri_tri_intersect(T, tid, Q, t, S->eps)) return FEMLOD_REJECT_INTERSECTION;
                         }
                     }
@@ -861,7 +989,6 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                 continue;
             const double *Q[3] = {p, P(S, R->a[s2]), P(S, R->b[s2])};
             uint32_t qid[3] = {K_ID, R->a[s2], R->b[s2]};
-            dbg_tt++;
             if (fl_tri_tri_intersect(T, tid, Q, qid, S->eps)) return FEMLOD_REJECT_INTERSECTION;
         }
     }
@@ -870,9 +997,10 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
 
 /* Candidate c passes the checks that are too costly for every evaluation. */
 static int expensive_checks(simp *S, ring *R, int c) {
+    STAT(expensive);
     const double *p = R->cand[c];
     int w;
-    if (S->cone_on && !FL_NO_CONE && (w = cone_check(S, R, p)) != NO_REASON) return w;
+    if (S->cone_on && (w = cone_check(S, R, p)) != NO_REASON) return w;
     if (S->dev_on && (w = deviation_check(S, R, p, &S->npts)) != NO_REASON) return w;
     return intersect_check(S, R, p);
 }
@@ -1111,7 +1239,7 @@ static int collapse(simp *S, ring *R, int c) {
     for (size_t r = 0; r < R->n; r++) {
         uint32_t f = R->face[r];
         face_update_cache(S, f);
-        if (S->cone_on && !FL_NO_CONE) memcpy(S->cone + 4 * (size_t)f, S->newcone + 4 * r, 4 * sizeof(float));
+        if (S->cone_on) memcpy(S->cone + 4 * (size_t)f, S->newcone + 4 * r, 4 * sizeof(float));
         if (!grid_add_face(S, f)) return 0;
     }
     S->collapses++;
@@ -1138,9 +1266,35 @@ static void update_edge(simp *S, uint32_t ed, int eligible) {
         return;
     }
     double rho = evaluate(S, &S->R, ed);
-    S->eflag[ed] = (uint8_t)((S->eflag[ed] & ~E_TOLFAIL) | (S->R.tolfail ? E_TOLFAIL : 0));
+    S->eflag[ed] = (uint8_t)((S->eflag[ed] & ~(E_TOLFAIL | E_STALE)) | (S->R.tolfail ? E_TOLFAIL : 0));
     if (rho >= 0.0) fl_heap_set(&S->heap, ed, rho);
     else fl_heap_remove(&S->heap, ed);
+}
+
+/* update_edge with an upper bound for the priority (phase 1, an edge away
+ * from k): the same decisions on validity and E_TOLFAIL. */
+static void bound_update(simp *S, uint32_t ed, uint32_t k) {
+    double ub = bound_edge(S, &S->R, ed, k);
+    S->eflag[ed] = (uint8_t)((S->eflag[ed] & ~(E_TOLFAIL | E_STALE)) | (S->R.tolfail ? E_TOLFAIL : 0));
+    if (ub >= 0.0) {
+        fl_heap_set(&S->heap, ed, ub);
+        S->eflag[ed] |= E_STALE;
+    } else {
+        fl_heap_remove(&S->heap, ed);
+    }
+}
+
+/* Evaluates queued upper bounds until the first of the queue is a priority:
+ * then it is the largest priority of all (each bound is at least its
+ * edge's priority), and the pops follow the same order as if every edge
+ * had been evaluated at once. */
+static void settle(simp *S) {
+    while (fl_heap_size(&S->heap) && !S->oom) {
+        uint32_t t = fl_heap_top(&S->heap);
+        if (!(S->eflag[t] & E_STALE)) return;
+        STAT(settles);
+        update_edge(S, t, 1);
+    }
 }
 
 /* After a collapse into slot k, every edge at k or at a vertex of its ring
@@ -1198,13 +1352,20 @@ static int reevaluate_ring(simp *S, uint32_t k) {
     }
     for (size_t x = 0; x < ne; x++) {
         uint32_t ed = S->ebuf[2 * x];
-        if (S->phase == 1 && S->ev[2 * (size_t)ed] != k && S->ev[2 * (size_t)ed + 1] != k) {
+        if (S->ev[2 * (size_t)ed] == k || S->ev[2 * (size_t)ed + 1] == k) S->eflag[ed] &= (uint8_t)~E_OPT;
+        else if (S->phase == 1) {
             /* An edge away from k keeps its endpoints, hence its candidates
              * and their quadric errors: one that failed C1 alone still does. */
-            if (S->eflag[ed] & E_TOLFAIL) continue;
-            /* Lazy: a queued edge keeps its (stale) key and is re-evaluated
-             * when popped, put back if its priority fell. */
-            if (FEMLOD_SIMPLIFY_LAZY && fl_heap_contains(&S->heap, ed)) continue;
+            if (S->eflag[ed] & E_TOLFAIL) {
+                STAT(skipped);
+                continue;
+            }
+            /* Exact lazy: an upper bound now, the priority when the bound
+             * reaches the top of the queue (settle). */
+            if (FEMLOD_SIMPLIFY_BOUND) {
+                bound_update(S, ed, k);
+                continue;
+            }
         }
         update_edge(S, ed, S->phase == 1 || S->ebuf[2 * x + 1]);
     }
@@ -1263,9 +1424,11 @@ static void simp_free(simp *S) {
     free(S->vmark);
     free(S->refs);
     free(S->tri);
+    free(S->fin);
     free(S->tedge);
     free(S->fn);
     free(S->fsz);
+    free(S->finv);
     free(S->cone);
     free(S->fmark);
     free(S->fpt);
@@ -1274,6 +1437,8 @@ static void simp_free(simp *S) {
     free(S->enf);
     free(S->eflag);
     free(S->emark);
+    free(S->ehint);
+    free(S->eopt);
     fl_heap_free(&S->heap);
     fl_grid_free(&S->grid);
     free(S->R.face);
@@ -1411,13 +1576,14 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     }
     *dropped = nt_in - nt;
     S->nt = nt;
+    S->nt_in = nt_in;
     S->live = nt;
 #define ALLOC(p, n) (((p) = fl_alloc((n), sizeof *(p))) != NULL)
 #define CALLOC(p, n) (((p) = fl_calloc((n), sizeof *(p))) != NULL)
     if (!ALLOC(S->pos, 3 * nv) || !CALLOC(S->q, nv) || !ALLOC(S->node, nv) || !ALLOC(S->fstart, nv + 1) ||
         !CALLOC(S->fcount, nv) || !CALLOC(S->val, nv) || !CALLOC(S->vflag, nv) || !CALLOC(S->fdeg, nv) ||
         !CALLOC(S->vmark, nv) || !ALLOC(S->tri, 3 * nt) || !ALLOC(S->tedge, 3 * nt) ||
-        !ALLOC(S->fn, 3 * nt) || !ALLOC(S->fsz, nt) || !CALLOC(S->fmark, nt))
+        !ALLOC(S->fn, 3 * nt) || !ALLOC(S->fsz, nt) || !ALLOC(S->finv, nt) || !CALLOC(S->fmark, nt))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory (%zu triangles)", nt_in);
     /* Vertex slots in Morton order of position: the neighbours of a vertex
      * then sit near it in memory, which halves the time on large meshes
@@ -1435,6 +1601,40 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
             S->fcount[slot_of[t[c]]]++;
         }
         nt++;
+    }
+    /* Faces in the order of their first vertex slot (a stable counting
+     * sort): the faces around a vertex then share cache lines too. fin
+     * remembers each face's input index for the output order. */
+    if (!ALLOC(S->fin, nt)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    {
+        uint32_t *cnt = fl_calloc(nv + 1, sizeof *cnt), *tmp = fl_alloc(3 * nt, sizeof *tmp);
+        uint32_t *fin0 = fl_alloc(nt, sizeof *fin0);
+        if (!cnt || !tmp || !fin0) {
+            free(cnt);
+            free(tmp);
+            free(fin0);
+            return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+        }
+        size_t w = 0;
+        for (size_t f = 0; f < nt_in; f++) {
+            const uint32_t *t = tin + 3 * f;
+            if (t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) fin0[w++] = (uint32_t)f;
+        }
+        for (size_t f = 0; f < nt; f++) {
+            const uint32_t *t = S->tri + 3 * f;
+            cnt[min3u(t) + 1]++;
+        }
+        for (size_t v = 0; v < nv; v++) cnt[v + 1] += cnt[v];
+        for (size_t f = 0; f < nt; f++) {
+            const uint32_t *t = S->tri + 3 * f;
+            uint32_t d = cnt[min3u(t)]++;
+            memcpy(tmp + 3 * (size_t)d, t, 3 * sizeof *t);
+            S->fin[d] = fin0[f];
+        }
+        memcpy(S->tri, tmp, 3 * nt * sizeof *tmp);
+        free(cnt);
+        free(tmp);
+        free(fin0);
     }
     /* vertex -> faces, in increasing face order */
     size_t acc = 0;
@@ -1521,8 +1721,10 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     if (ev2) S->ev = ev2;
     uint16_t *enf2 = fl_realloc(S->enf, ne + 1, sizeof *enf2);
     if (enf2) S->enf = enf2;
-    if (!CALLOC(S->eflag, ne + 1) || !CALLOC(S->emark, ne + 1))
+    if (!CALLOC(S->eflag, ne + 1) || !CALLOC(S->emark, ne + 1) || !ALLOC(S->ehint, 2 * ne + 2) ||
+        !ALLOC(S->eopt, 3 * ne + 3))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    memset(S->ehint, 0xff, (2 * ne + 2) * sizeof *S->ehint);
 
     double lo[3], hi[3];
     femlod_mesh_bbox(mesh, lo, hi);
@@ -1706,9 +1908,12 @@ static int run_queue(simp *S, const femlod_simplify_options *o, size_t live0, si
     ring *R = &S->R;
     while (S->live > S->target) {
         double key;
+        settle(S);
         uint32_t e = fl_heap_pop(&S->heap, &key);
         if (e == UINT32_MAX) break;
-        dbg_pops++;
+        STAT(pops);
+        settle(S); /* the keys compared below are priorities */
+        if (S->oom) return 0;
         double rho = evaluate(S, R, e);
         if (S->oom) return 0;
         if (rho < 0.0) continue;
@@ -1716,10 +1921,14 @@ static int run_queue(simp *S, const femlod_simplify_options *o, size_t live0, si
             fl_heap_set(&S->heap, e, rho);
             continue;
         }
+        int lw = link_check(S, R);
+        if (lw != NO_REASON) { /* back when its neighbourhood changes */
+            S->rejected[lw]++;
+            continue;
+        }
         int chosen = -1;
         for (int c = 0; c < R->ncand && chosen < 0; c++) {
             if (!R->ok[c]) continue;
-            dbg_exp++;
             int w = expensive_checks(S, R, c);
             if (S->oom) return 0;
             if (w == NO_REASON) chosen = c;
@@ -1762,7 +1971,6 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
          * (an intersection with a triangle that has moved away since) */
         if (last_retry == S->collapses) break;
         last_retry = S->collapses;
-        dbg_retry++;
         if (!evaluate_all(S)) break;
         if (S->oom) return 0;
         int r = run_queue(S, o, live0, &next);
@@ -1804,12 +2012,24 @@ static femlod_status make_output(simp *S, femlod_mesh **out, femlod_collapse_log
     }
     for (size_t v = 0; v < S->nv; v++)
         if (map[v] != UINT32_MAX) memcpy(m->pos + 3 * (size_t)map[v], S->pos + 3 * v, 3 * sizeof(double));
+    /* triangles in the order of the input triangles they descend from */
+    uint32_t *byin = fl_alloc(S->nt_in, sizeof *byin);
+    if (!byin) {
+        free(map);
+        femlod_mesh_free(m);
+        return FEMLOD_ENOMEM;
+    }
+    memset(byin, 0xff, S->nt_in * sizeof *byin);
+    for (size_t f = 0; f < S->nt; f++)
+        if (face_alive(S, (uint32_t)f)) byin[S->fin[f]] = (uint32_t)f;
     size_t w = 0;
-    for (size_t f = 0; f < S->nt; f++) {
-        if (!face_alive(S, (uint32_t)f)) continue;
-        for (int c = 0; c < 3; c++) m->tri[3 * w + c] = map[S->tri[3 * f + c]];
+    for (size_t x = 0; x < S->nt_in; x++) {
+        uint32_t f = byin[x];
+        if (f == UINT32_MAX) continue;
+        for (int c = 0; c < 3; c++) m->tri[3 * w + c] = map[S->tri[3 * (size_t)f + c]];
         w++;
     }
+    free(byin);
     if (log) {
         log->out_nodes = fl_alloc(nv, sizeof *log->out_nodes);
         if (!log->out_nodes) {
@@ -1850,14 +2070,12 @@ static double now_seconds(void) {
 femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, const femlod_mesh *mesh,
                               const femlod_simplify_options *options, femlod_simplify_result *result,
                               femlod_error *err) {
-    if (!out || !mesh) return fl_error(err, FEMLOD_EINPUT, "simplify: NULL argument");
+    assert(out && mesh); /* femlod.h: NULL handles are programming errors */
     double t0 = now_seconds();
     femlod_simplify_options defaults = FEMLOD_SIMPLIFY_OPTIONS_INIT;
     const femlod_simplify_options *o = options ? options : &defaults;
     simp *S = calloc(1, sizeof *S);
     if (!S) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
-    S->szdif_ring = FEMLOD_SIMPLIFY_SZDIF_RING;
-    S->opt_when_mid_fails = FEMLOD_SIMPLIFY_OPT_WHEN_MID_FAILS;
     size_t dropped = 0;
     femlod_status st = setup(S, mesh, o, &dropped, err);
     if (st != FEMLOD_OK) {
@@ -1883,9 +2101,19 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     }
     if (S->log) S->log->prephase = S->prephase;
-    if (getenv("FL_DEBUG"))
-        fprintf(stderr, "evals %zu pops %zu expensive %zu retries %zu collapses %zu ne %zu cells %zu items %zu tt %zu\n", dbg_evals, dbg_pops,
-                dbg_exp, dbg_retry, S->collapses, S->ne, dbg_cells, dbg_items, dbg_tt);
+#if FEMLOD_SIMPLIFY_STATS
+    {
+        const simp_stats *c = &S->stats;
+        double n = S->collapses ? (double)S->collapses : 1.0;
+        fprintf(stderr,
+                "simplify stats per collapse (%zu): bounds %.2f evals %.2f (settle %.2f, prefix fail %.2f) cands %.2f (ok %.2f) "
+                "solves %.2f pops %.2f links %.2f expensive %.2f cells %.1f items %.1f tritri %.1f skipped %.2f\n",
+                S->collapses, (double)c->bounds / n, (double)c->evals / n, (double)c->settles / n, (double)(c->evals + c->bounds - c->rings) / n,
+                (double)c->cands / n, (double)c->cand_ok / n, (double)c->solves / n, (double)c->pops / n,
+                (double)c->links / n, (double)c->expensive / n, (double)c->cells / n, (double)c->items / n,
+                (double)c->tritri / n, (double)c->skipped / n);
+    }
+#endif
     if (result) {
         memset(result, 0, sizeof *result);
         result->triangles = m->nt;

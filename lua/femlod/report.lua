@@ -166,14 +166,16 @@ end
 
 -- Four lines: why and after how much work it stopped, which checks refused
 -- collapses (counts of edge evaluations), the input triangles left breaking
--- a threshold, and the thresholds in force ("off" when switched off).
+-- a threshold, and the thresholds in force ("off" when switched off, target
+-- "none" when there was none).
 function M.stats(s)
   s = stats_of(s, "stats")
   local rej, th = {}, {}
   for i, k in ipairs(REJECTED) do rej[i] = format("%s %d", k, s.rejected[k] or 0) end
   for i, k in ipairs(THRESHOLDS) do
     local v = s.thresholds[k]
-    th[i] = format("%s %s", k, v == false and "off" or type(v) == "number" and num(v) or "?")
+    local off = k == "target" and "none" or "off"
+    th[i] = format("%s %s", k, v == false and off or type(v) == "number" and num(v) or "?")
   end
   return concat({
     format("stop: %s; %s (%d in the pre-phase) in %.3f s", s.stop_reason,

@@ -1,6 +1,6 @@
 /*
- * main.c - the femlod program: runs Lua recipes and the info, convert and
- * simplify commands (shaped like Lua's own lua.c: all work happens in pmain, under
+ * main.c - the femlod program: runs Lua recipes and the info, convert,
+ * simplify and lod commands (shaped like Lua's own lua.c: all work happens in pmain, under
  * lua_pcall, and errors are reported once, in main).
  *
  * Grammar: femlod [options] COMMAND [ARGS] [name=value ...]; see usage().
@@ -14,6 +14,7 @@
 
 #include <lualib.h>
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -23,7 +24,9 @@
 
 enum { EXIT_OK = 0, EXIT_ERROR = 1, EXIT_USAGE = 2, EXIT_LIMIT = 3 };
 
-typedef enum command { CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY } command;
+typedef enum command {
+    CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY, CMD_LOD
+} command;
 
 /* What the command line asked for. Indices point into argv. */
 typedef struct cli {
@@ -49,6 +52,7 @@ static void usage_text(FILE *f) {
           "                   report=text|row|fields  format=FMT  reference=MESH\n"
           "  convert IN OUT   read IN and write OUT (format from the extension)\n"
           "                   format=FMT (of OUT)  input_format=FMT (of IN)\n"
+          "                   glTF OUT: color_by=stretch|size|valence  normals=true\n"
           "  simplify IN OUT  simplify IN into OUT; print the before/after report\n"
           "                   --target N | --ratio R  (triangles, or output/input)\n"
           "                   --tolerance X  --max-deviation X  --min-stretch X\n"
@@ -56,7 +60,13 @@ static void usage_text(FILE *f) {
           "                   --feature-weight W  --max-normal-change DEG\n"
           "                   (each of these also takes 'off')\n"
           "                   --keep-boundary  --area-weighted  --lock I,J,K\n"
+          "                   --hierarchy PART.flh  (also write the vertex hierarchy)\n"
           "                   or as pairs: target=3000 min_stretch=0.3 lock=4,9\n"
+          "  lod PART.flh OUT --size T\n"
+          "                   write a mesh from a saved hierarchy: the simplification\n"
+          "                   result, refined where a vertex's e_size (mean edge\n"
+          "                   length) exceeds T; 0 gives the input, inf the\n"
+          "                   simplification result; also size=T\n"
           "  help             print this help\n"
           "\n"
           "Options:\n"
@@ -166,6 +176,9 @@ static int parse_args(lua_State *L, cli *c) {
     } else if (strcmp(w, "simplify") == 0) {
         c->cmd = CMD_SIMPLIFY;
         need = 2;
+    } else if (strcmp(w, "lod") == 0) {
+        c->cmd = CMD_LOD;
+        need = 2;
     } else if (strcmp(w, "help") == 0) {
         usage_text(stdout);
         return EXIT_OK;
@@ -180,7 +193,8 @@ static int parse_args(lua_State *L, cli *c) {
     if (c->operand + need > c->argc) {
         static const char *const what[] = {"", "a recipe", "a line of Lua", "a mesh file",
                                            "an input and an output file",
-                                           "an input and an output file"};
+                                           "an input and an output file",
+                                           "a hierarchy file and an output file"};
         return usage_error("missing %s", what[c->cmd]);
     }
     c->pairs = c->operand + (need ? need : 1);
@@ -344,7 +358,7 @@ static const char *pair_string(lua_State *L, int pairs, const char *key) {
 static int check_format(const char *key, const char *name) {
     if (name && femlod_format_from_name(name) == FEMLOD_FORMAT_AUTO)
         return usage_error("%s: unknown format '%s' (valid: obj, stl, stl_ascii, stl_binary, "
-                           "off, ply, ply_ascii, ply_binary)",
+                           "off, ply, ply_ascii, ply_binary, gltf, glb)",
                            key, name);
     return -1;
 }
@@ -414,8 +428,8 @@ static int cmd_info(lua_State *L, const cli *c) {
 }
 
 static int cmd_convert(lua_State *L, const cli *c) {
-    static const char *const keys[] = {"format", "input_format", NULL};
-    int st = check_pairs(L, c, keys, "format, input_format");
+    static const char *const keys[] = {"format", "input_format", "color_by", "normals", NULL};
+    int st = check_pairs(L, c, keys, "format, input_format, color_by, normals");
     if (st >= 0) return st;
     int pairs = lua_gettop(L);
     const char *format = pair_string(L, pairs, "format");
@@ -429,11 +443,16 @@ static int cmd_convert(lua_State *L, const cli *c) {
     load_mesh(L, module, in, input_format);
     int mesh = lua_gettop(L);
     lua_pushstring(L, out);
-    lua_createtable(L, 0, 1);
+    lua_createtable(L, 0, 3);
     if (format) {
         lua_pushstring(L, format);
         lua_setfield(L, -2, "format");
     }
+    /* glTF options go to mesh:save as given (normals=true is a boolean). */
+    lua_getfield(L, pairs, "color_by");
+    lua_setfield(L, -2, "color_by");
+    lua_getfield(L, pairs, "normals");
+    lua_setfield(L, -2, "normals");
     call_method(L, mesh, "save", 2, 0);
     if (!c->quiet) {
         call_method(L, mesh, "counts", 0, 1);
@@ -456,7 +475,7 @@ static int cmd_convert(lua_State *L, const cli *c) {
  * error (exit 2) with the same rules as the Lua API.
  * ===================================================================== */
 
-enum { OPT_NUMBER, OPT_THRESHOLD, OPT_SWITCH, OPT_LOCK };
+enum { OPT_NUMBER, OPT_THRESHOLD, OPT_SWITCH, OPT_LOCK, OPT_PATH };
 
 typedef struct simplify_opt {
     const char *flag, *key;
@@ -477,12 +496,14 @@ static const simplify_opt simplify_opts[] = {
     {"--keep-boundary", "keep_boundary", OPT_SWITCH},
     {"--area-weighted", "area_weighted", OPT_SWITCH},
     {"--lock", "lock", OPT_LOCK},
+    {"--hierarchy", "hierarchy", OPT_PATH}, /* not a simplify option: the .flh to write */
 };
 #define N_SIMPLIFY_OPTS (sizeof simplify_opts / sizeof simplify_opts[0])
 
 static const char SIMPLIFY_KEYS[] = "target, ratio, tolerance, max_deviation, min_stretch, "
                                     "max_size, max_valence, feature_angle, feature_weight, "
-                                    "max_normal_change, keep_boundary, area_weighted, lock";
+                                    "max_normal_change, keep_boundary, area_weighted, lock, "
+                                    "hierarchy";
 
 /* Pushes the list "I,J,K" as a table of integers (range checked later,
  * against the mesh). */
@@ -540,6 +561,10 @@ static int set_simplify_opt(lua_State *L, int opts, int spell, const simplify_op
         if (st >= 0) return st;
         break;
     }
+    case OPT_PATH:
+        if (value[0] == '\0') return usage_error("%s: file name expected, got ''", name);
+        lua_pushstring(L, value);
+        break;
     default:
         if (o->kind == OPT_THRESHOLD && (strcmp(value, "off") == 0 || strcmp(value, "false") == 0))
             lua_pushboolean(L, 0);
@@ -618,6 +643,11 @@ static int cmd_simplify(lua_State *L, const cli *c) {
     int st = simplify_options(L, c);
     if (st >= 0) return st;
     int spell = lua_gettop(L), opts = spell - 1;
+    /* --hierarchy is the program's, not the simplification's. */
+    lua_getfield(L, opts, "hierarchy");
+    int flh = lua_gettop(L);
+    lua_pushnil(L);
+    lua_setfield(L, opts, "hierarchy");
 
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);
@@ -647,6 +677,12 @@ static int cmd_simplify(lua_State *L, const cli *c) {
     int h = lua_gettop(L);
     call_method(L, h, "mesh", 0, 1);
     int result = lua_gettop(L);
+    /* The hierarchy first: OUT is written last, so that OUT exists only
+     * when everything asked for was written. */
+    if (!lua_isnil(L, flh)) {
+        lua_pushvalue(L, flh);
+        call_method(L, h, "save", 1, 0);
+    }
     lua_pushstring(L, out);
     call_method(L, result, "save", 1, 0);
     if (c->quiet) return EXIT_OK;
@@ -678,6 +714,118 @@ static int cmd_simplify(lua_State *L, const cli *c) {
     femlod_format f = femlod_format_from_path(out);
     printf("%s: %lld triangles, %lld vertices (%s)\n", out, (long long)lua_tointeger(L, -2),
            (long long)lua_tointeger(L, -1), femlod_format_name(f));
+    if (!lua_isnil(L, flh)) {
+        call_method(L, h, "counts", 0, 1);
+        lua_getfield(L, -1, "nodes");
+        lua_getfield(L, -2, "input_vertices");
+        lua_getfield(L, -3, "collapses");
+        printf("%s: %lld nodes: %lld input vertices, %lld collapses (hierarchy)\n",
+               lua_tostring(L, flh), (long long)lua_tointeger(L, -3),
+               (long long)lua_tointeger(L, -2), (long long)lua_tointeger(L, -1));
+    }
+    return EXIT_OK;
+}
+
+/* }==================================================================== */
+
+/* {====================================================================
+ * lod: a mesh from a saved hierarchy at a uniform size threshold. The
+ * front is first brought back to the simplification's result, then refined,
+ * so the output depends only on the file and T, not on the front the file
+ * was saved with.
+ * ===================================================================== */
+
+/* Reads --size T, --size=T or size=T after PART.flh OUT into *size. */
+static int lod_options(lua_State *L, const cli *c, double *size, const char **spelled) {
+    *spelled = NULL;
+    for (int i = c->pairs; i < c->argc; i++) {
+        const char *a = c->argv[i], *value = NULL, *name = a;
+        if (strncmp(a, "--", 2) == 0) {
+            const char *eq = strchr(a, '=');
+            size_t len = eq ? (size_t)(eq - a) : strlen(a);
+            if (len != 6 || strncmp(a, "--size", 6) != 0)
+                return usage_error("unknown option '%.*s'", (int)len, a);
+            name = "--size";
+            if (eq) {
+                value = eq + 1;
+            } else {
+                if (i + 1 >= c->argc) return usage_error("--size needs a value");
+                value = c->argv[++i];
+            }
+        } else {
+            const char *eq = strchr(a, '=');
+            if (!eq || eq == a) return usage_error("expected name=value, got '%s'", a);
+            if ((size_t)(eq - a) != 4 || strncmp(a, "size", 4) != 0)
+                return usage_error("unknown parameter '%.*s' (valid: size)", (int)(eq - a), a);
+            name = "size";
+            value = eq + 1;
+        }
+        if (*spelled) return usage_error("option given twice: '%s'", name);
+        *spelled = name;
+        if (strcmp(value, "inf") == 0) {
+            *size = HUGE_VAL;
+        } else {
+            int ok = lua_stringtonumber(L, value) != 0;
+            if (ok) {
+                *size = (double)lua_tonumber(L, -1);
+                lua_pop(L, 1);
+            }
+            if (!ok || !(*size >= 0.0))
+                return usage_error("%s: number >= 0 or inf expected, got '%s'", name, value);
+        }
+    }
+    if (!*spelled) return usage_error("lod: --size T is required");
+    return -1;
+}
+
+static int cmd_lod(lua_State *L, const cli *c) {
+    const char *in = c->argv[c->operand], *out = c->argv[c->operand + 1];
+    if (strncmp(in, "--", 2) == 0 || strncmp(out, "--", 2) == 0)
+        return usage_error("lod: PART.flh and OUT come first, then --size T");
+    double size = 0.0;
+    const char *spelled;
+    int st = lod_options(L, c, &size, &spelled);
+    if (st >= 0) return st;
+
+    luaL_requiref(L, "femlod", luaopen_femlod, 0);
+    int module = lua_gettop(L);
+    lua_getfield(L, module, "load_hierarchy");
+    lua_pushstring(L, in);
+    lua_call(L, 1, 1);
+    int h = lua_gettop(L);
+    lua_pushnumber(L, HUGE_VAL);
+    call_method(L, h, "coarsen", 1, 0);
+    lua_pushnumber(L, size);
+    call_method(L, h, "refine", 1, 1);
+    lua_Integer splits = lua_tointeger(L, -1);
+    call_method(L, h, "mesh", 0, 1);
+    int result = lua_gettop(L);
+    lua_pushstring(L, out);
+    call_method(L, result, "save", 1, 0);
+    if (c->quiet) return EXIT_OK;
+
+    char state[48];
+    snprintf(state, sizeof state, "size %.6g", size);
+    lua_getglobal(L, "require");
+    lua_pushliteral(L, "femlod.report");
+    lua_call(L, 1, 1);
+    int report_mod = lua_gettop(L);
+    lua_getfield(L, report_mod, "header");
+    lua_call(L, 0, 1);
+    printf("%s\n", lua_tostring(L, -1));
+    lua_getfield(L, report_mod, "row");
+    lua_pushvalue(L, result);
+    lua_pushstring(L, base_name(in));
+    lua_pushstring(L, state);
+    lua_call(L, 3, 1);
+    printf("%s\n", lua_tostring(L, -1));
+    printf("%lld splits from the simplification result\n", (long long)splits);
+    call_method(L, result, "counts", 0, 1);
+    lua_getfield(L, -1, "triangles");
+    lua_getfield(L, -2, "vertices");
+    femlod_format f = femlod_format_from_path(out);
+    printf("%s: %lld triangles, %lld vertices (%s)\n", out, (long long)lua_tointeger(L, -2),
+           (long long)lua_tointeger(L, -1), femlod_format_name(f));
     return EXIT_OK;
 }
 
@@ -703,6 +851,7 @@ static int pmain(lua_State *L) {
         case CMD_INFO: st = cmd_info(L, &c); break;
         case CMD_CONVERT: st = cmd_convert(L, &c); break;
         case CMD_SIMPLIFY: st = cmd_simplify(L, &c); break;
+        case CMD_LOD: st = cmd_lod(L, &c); break;
         case CMD_NONE: st = EXIT_USAGE; break;
         }
     }

@@ -70,21 +70,26 @@ FL_LUA_INTERNAL femlod_mesh **fl_lmesh_box(lua_State *L);
 
 #define FL_HIERARCHY_MT "femlod.Hierarchy"
 
-/* What femlod.simplify returns, and what the vertex hierarchy builds on: the
- * members grow with it. The box is pushed zeroed (closed) and filled only
- * when femlod_simplify succeeded, so a closed box is mesh == NULL; close()
- * frees every member and zeroes the box. */
+/* What femlod.simplify and femlod.load_hierarchy return: the vertex
+ * hierarchy with its front, and the simplification's result record. The
+ * simplified mesh and the collapse log are not kept: the hierarchy holds all
+ * they said (h:mesh() extracts the front). The box is pushed zeroed (closed)
+ * and filled only on success, so a closed box is hier == NULL; close() frees
+ * the hierarchy and zeroes the box. */
 typedef struct fl_hierarchy {
-    femlod_mesh *mesh;          /* the simplified mesh; NULL when closed */
-    femlod_collapse_log *log;   /* every collapse, in order */
-    femlod_simplify_result result;
+    femlod_hierarchy *hier;        /* NULL when closed */
+    femlod_simplify_result result; /* zeroed when there is none (has_result 0) */
+    int has_result;                /* 0: loaded from a file saved without one */
+    size_t log_bytes;              /* the collapse log it was built from; 0 when loaded */
+    int busy;                      /* a size function of refine/coarsen is running */
 } fl_hierarchy;
 
-/* Creates the metatable, adds the module function simplify to the table on
- * the top of the stack and the method simplify to femlod.Mesh (call it after
- * fl_lmesh_open). */
+/* Creates the metatable, adds the module functions simplify and
+ * load_hierarchy to the table on the top of the stack and the method
+ * simplify to femlod.Mesh (call it after fl_lmesh_open). */
 FL_LUA_INTERNAL void fl_lhierarchy_open(lua_State *L);
-/* The hierarchy at argument arg; raises on a wrong type or a closed one. */
+/* The hierarchy at argument arg; raises on a wrong type, a closed one, or
+ * one whose size function is running (a refine or coarsen in progress). */
 FL_LUA_INTERNAL fl_hierarchy *fl_lhierarchy_check(lua_State *L, int arg);
 
 /* Reads the simplify options that are plain values (every key but lock and

@@ -1,25 +1,35 @@
 /*
- * lhierarchy.c - femlod.simplify and the femlod.Hierarchy userdata.
+ * lhierarchy.c - femlod.simplify, femlod.load_hierarchy and the
+ * femlod.Hierarchy userdata.
  *
- * A Hierarchy is a box (fl_hierarchy, lfemlod.h) holding what one
- * simplification made: the simplified mesh, the collapse log and the
- * result record. Like a Mesh it is pushed empty, with its metatable and
- * __gc in place, before femlod_simplify fills it, and it frees its C
- * memory in one release shared by __gc, __close and close().
+ * A Hierarchy is a box (fl_hierarchy, lfemlod.h) holding the vertex
+ * hierarchy of one simplification, with its front, and the simplification's
+ * result record. femlod.simplify builds the hierarchy from the input mesh
+ * and the collapse log as soon as femlod_simplify returns, then frees the
+ * simplified mesh and the log: the hierarchy holds all they said, and
+ * h:mesh() extracts the front. Like a Mesh the box is pushed empty, with its
+ * metatable and __gc in place, before it is filled, and it frees its C
+ * memory in one release shared by __gc, __close and close(). Node ids are
+ * 1-based here and in every message (C id + 1).
  *
- * No Lua error may cross femlod_simplify (a longjmp through it would leak
- * its work memory and skip its clean-up), so the recipe's Lua runs outside
- * it or under lua_pcall:
+ * No Lua error may cross the core (a longjmp through it would leak its work
+ * memory and skip its clean-up), so the recipe's Lua runs outside it or
+ * under lua_pcall:
  *   - lock: the indices are read, or the lock function is called for every
  *     vertex, before femlod_simplify runs; the result is an index list in a
  *     Lua-owned buffer, so a raise there (a bad index, an error inside the
  *     function) leaks nothing;
  *   - progress: called from femlod_simplify through lua_pcall; an error
  *     cancels the run, and is raised again once femlod_simplify returned
- *     and its results were freed.
+ *     and its results were freed;
+ *   - the size functions of refine and coarsen: called from the core
+ *     through lua_pcall (a trampoline builds the node table under it); a
+ *     failure returns NaN, which stops the operation with a valid front,
+ *     and is raised once the core returned.
  * While femlod_simplify runs, the input Mesh's box is empty, so a progress
  * function that closes or uses that mesh finds it closed instead of freeing
- * it under the simplifier.
+ * it under the simplifier. While a size function runs, its Hierarchy is
+ * busy: using or closing it raises (inside the function).
  */
 #include "lfemlod.h"
 #include "lopts.h"
@@ -28,6 +38,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 /* {====================================================================
@@ -279,8 +290,7 @@ static fl_hierarchy *hierarchy_box(lua_State *L) {
 }
 
 static void hierarchy_release(fl_hierarchy *h) {
-    femlod_mesh_free(h->mesh);
-    femlod_collapse_log_free(h->log);
+    femlod_hierarchy_free(h->hier);
     memset(h, 0, sizeof *h);
 }
 
@@ -317,9 +327,20 @@ static int lib_simplify(lua_State *L) {
     int hidx = lua_gettop(L);
     luaL_checkstack(L, 4, NULL); /* for call_progress, which must not raise */
     femlod_error err;
+    femlod_mesh *simplified = NULL;
+    femlod_collapse_log *log = NULL;
     *mbox = NULL; /* busy: see the top of the file */
-    femlod_status st = femlod_simplify(&h->mesh, &h->log, mesh, &so, &h->result, &err);
+    femlod_status st = femlod_simplify(&simplified, &log, mesh, &so, &h->result, &err);
     *mbox = mesh;
+    /* The hierarchy holds everything the simplified mesh and the log said:
+     * both go as soon as it is built. */
+    if (st == FEMLOD_OK && pc.failed == PROGRESS_OK) {
+        st = femlod_hierarchy_create(&h->hier, mesh, log, &err);
+        h->log_bytes = femlod_collapse_log_bytes(log);
+        h->has_result = 1;
+    }
+    femlod_mesh_free(simplified);
+    femlod_collapse_log_free(log);
     if (pc.failed != PROGRESS_OK) {
         hierarchy_release(h);
         if (pc.failed == PROGRESS_ERROR) return lua_error(L);
@@ -327,35 +348,423 @@ static int lib_simplify(lua_State *L) {
                              lua_pushfstring(L, "function returned %s (boolean or nil expected)",
                                              pc.got));
     }
-    if (st != FEMLOD_OK) return fl_lua_raise(L, &err);
+    if (st != FEMLOD_OK) {
+        hierarchy_release(h);
+        return fl_lua_raise(L, &err);
+    }
     lua_settop(L, hidx);
+    return 1;
+}
+
+/* A path for the C library: a zero byte would silently cut it short. */
+static const char *check_path(lua_State *L, int arg) {
+    size_t len;
+    const char *path = luaL_checklstring(L, arg, &len);
+    luaL_argcheck(L, strlen(path) == len, arg, "path contains a zero byte");
+    return path;
+}
+
+/* Refuses extra arguments: a recipe's options table there would be ignored. */
+static void no_more_arguments(lua_State *L, int arg) {
+    luaL_argcheck(L, lua_isnone(L, arg), arg, "no more arguments expected");
+}
+
+/* A result as femlod_hierarchy_load gives it for a file saved without one:
+ * all zero. A real one never has min_stretch and max_valence both 0 (each
+ * is in force, > 0, or off, < 0). */
+static int result_is_none(const femlod_simplify_result *r) {
+    return r->min_stretch == 0.0 && r->max_valence == 0 && r->triangles == 0 && r->collapses == 0;
+}
+
+/* femlod.load_hierarchy(path): a Hierarchy from a .flh file, with its front. */
+static int lib_load_hierarchy(lua_State *L) {
+    const char *path = check_path(L, 1);
+    no_more_arguments(L, 2);
+    fl_hierarchy *h = hierarchy_box(L);
+    femlod_error err;
+    if (femlod_hierarchy_load(&h->hier, path, &h->result, &err) != FEMLOD_OK) {
+        hierarchy_release(h);
+        return fl_lua_raise(L, &err);
+    }
+    h->has_result = !result_is_none(&h->result);
     return 1;
 }
 
 /* }==================================================================== */
 
 /* {====================================================================
- * Methods
+ * Methods. Node ids are 1-based here (Lua id = C id + 1); every message
+ * names them so.
  * ===================================================================== */
 
 fl_hierarchy *fl_lhierarchy_check(lua_State *L, int arg) {
     fl_hierarchy *h = (fl_hierarchy *)luaL_checkudata(L, arg, FL_HIERARCHY_MT);
-    if (!h->mesh) luaL_error(L, "attempt to use a closed femlod.Hierarchy");
+    if (h->busy) luaL_error(L, "attempt to use a femlod.Hierarchy inside its own size function");
+    if (!h->hier) luaL_error(L, "attempt to use a closed femlod.Hierarchy");
     return h;
-}
-
-/* h:mesh(): a new Mesh, a copy of the simplified mesh. */
-static int hierarchy_mesh(lua_State *L) {
-    const fl_hierarchy *h = fl_lhierarchy_check(L, 1);
-    femlod_mesh **slot = fl_lmesh_box(L);
-    femlod_error err;
-    if (femlod_mesh_copy(slot, h->mesh, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
-    return 1;
 }
 
 static void set_integer(lua_State *L, const char *key, size_t v) {
     lua_pushinteger(L, (lua_Integer)v);
     lua_setfield(L, -2, key);
+}
+
+static lua_Integer lid(uint32_t id) { return (lua_Integer)id + 1; }
+
+static const char *state_name(femlod_node_state s) {
+    return s == FEMLOD_NODE_FRONT ? "front" : s == FEMLOD_NODE_ABOVE ? "above" : "below";
+}
+
+/* Pushes the node table {id, parent, children, e_size, depth, state} and,
+ * when with_position, position = {x, y, z}. */
+static void push_node(lua_State *L, const femlod_node_info *n, int with_position) {
+    lua_createtable(L, 0, 7);
+    lua_pushinteger(L, lid(n->id));
+    lua_setfield(L, -2, "id");
+    if (n->parent != UINT32_MAX) {
+        lua_pushinteger(L, lid(n->parent));
+        lua_setfield(L, -2, "parent");
+    }
+    if (n->child[0] != UINT32_MAX) {
+        lua_createtable(L, 2, 0);
+        lua_pushinteger(L, lid(n->child[0]));
+        lua_rawseti(L, -2, 1);
+        lua_pushinteger(L, lid(n->child[1]));
+        lua_rawseti(L, -2, 2);
+        lua_setfield(L, -2, "children");
+    }
+    lua_pushnumber(L, n->e_size);
+    lua_setfield(L, -2, "e_size");
+    lua_pushinteger(L, (lua_Integer)n->depth);
+    lua_setfield(L, -2, "depth");
+    lua_pushstring(L, state_name(n->state));
+    lua_setfield(L, -2, "state");
+    if (with_position) {
+        lua_createtable(L, 3, 0);
+        for (int k = 0; k < 3; k++) {
+            lua_pushnumber(L, n->position[k]);
+            lua_rawseti(L, -2, k + 1);
+        }
+        lua_setfield(L, -2, "position");
+    }
+}
+
+/* Extracts the front into a new Mesh box pushed on the stack (the mesh is
+ * Lua-owned before anything can raise). When ids is not NULL, *ids gets the
+ * malloc'd node ids, which the caller frees before anything raises. */
+static femlod_mesh *push_front_mesh(lua_State *L, fl_hierarchy *h, uint32_t **ids) {
+    femlod_mesh **slot = fl_lmesh_box(L);
+    femlod_error err;
+    if (femlod_hierarchy_extract(h->hier, slot, ids, &err) != FEMLOD_OK) fl_lua_raise(L, &err);
+    return *slot;
+}
+
+/* h:mesh(): the current front as a new Mesh. */
+static int hierarchy_mesh(lua_State *L) {
+    fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    no_more_arguments(L, 2);
+    push_front_mesh(L, h, NULL);
+    return 1;
+}
+
+/* h:front(): the node id of each vertex of h:mesh(), in its order. */
+static int hierarchy_front(lua_State *L) {
+    fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    no_more_arguments(L, 2);
+    /* The table is sized before the extraction (the front has at least as
+     * many nodes as the mesh has vertices), so that filling its array part
+     * allocates nothing and cannot raise while ids is held. */
+    size_t bound = femlod_hierarchy_front_nodes(h->hier);
+    if (bound > (size_t)INT_MAX) return luaL_error(L, "front too large for a Lua table");
+    lua_createtable(L, (int)bound, 0);
+    uint32_t *ids = NULL;
+    femlod_mesh *m = push_front_mesh(L, h, &ids);
+    size_t nv = femlod_mesh_vertex_count(m);
+    for (size_t i = 0; i < nv; i++) {
+        lua_pushinteger(L, lid(ids[i]));
+        lua_rawseti(L, -3, (lua_Integer)i + 1);
+    }
+    free(ids);
+    femlod_mesh **slot = (femlod_mesh **)lua_touserdata(L, -1);
+    femlod_mesh_free(*slot); /* now, rather than at some later collection */
+    *slot = NULL;
+    lua_pop(L, 1);
+    return 1;
+}
+
+/* Vertices of the front mesh (front nodes used by a triangle): counted on
+ * an extraction, linear in the front. */
+static size_t front_vertices(lua_State *L, fl_hierarchy *h) {
+    femlod_mesh *m = push_front_mesh(L, h, NULL);
+    size_t nv = femlod_mesh_vertex_count(m);
+    femlod_mesh **slot = (femlod_mesh **)lua_touserdata(L, -1);
+    femlod_mesh_free(*slot);
+    *slot = NULL;
+    lua_pop(L, 1);
+    return nv;
+}
+
+static int hierarchy_counts(lua_State *L) {
+    fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    const femlod_hierarchy *x = h->hier;
+    size_t vertices = front_vertices(L, h);
+    lua_createtable(L, 0, 7);
+    set_integer(L, "nodes", femlod_hierarchy_node_count(x));
+    set_integer(L, "input_vertices", femlod_hierarchy_input_vertices(x));
+    set_integer(L, "collapses",
+                femlod_hierarchy_node_count(x) - femlod_hierarchy_input_vertices(x));
+    set_integer(L, "front_nodes", femlod_hierarchy_front_nodes(x));
+    set_integer(L, "triangles", femlod_hierarchy_front_triangles(x));
+    set_integer(L, "vertices", vertices);
+    set_integer(L, "bytes", femlod_hierarchy_bytes(x));
+    return 1;
+}
+
+/* The node id (1-based) on the top of the stack, of type t, checked against
+ * the hierarchy; returns the C id. what (NULL or "ids[3]") prefixes the
+ * messages. */
+static uint32_t check_node_id(lua_State *L, int arg, const femlod_hierarchy *x, int t,
+                              const char *what) {
+    int isint = 0;
+    lua_Integer id = lua_tointegerx(L, -1, &isint);
+    const char *pre = what ? what : "", *sep = what ? ": " : "";
+    if (t != LUA_TNUMBER || !isint) {
+        const char *got = t == LUA_TNUMBER ? lua_pushfstring(L, "%f", (double)lua_tonumber(L, -1))
+                                           : lua_typename(L, t);
+        luaL_argerror(L, arg, lua_pushfstring(L, "%s%snode id expected, got %s", pre, sep, got));
+    }
+    lua_Integer n = (lua_Integer)femlod_hierarchy_node_count(x);
+    if (id < 1 || id > n)
+        luaL_argerror(L, arg,
+                      lua_pushfstring(L, "%s%snode %I does not exist (1..%I)", pre, sep, id, n));
+    return (uint32_t)(id - 1);
+}
+
+/* The front node holding node x (x below the front). */
+static uint32_t front_above(const femlod_hierarchy *x, uint32_t id) {
+    femlod_node_info n;
+    while (femlod_hierarchy_node(x, id, &n) && n.state != FEMLOD_NODE_FRONT) id = n.parent;
+    return id;
+}
+
+/* Checks that node id (C) can be split (split) or collapsed (!split) now;
+ * raises an argument error naming it otherwise. */
+static void check_operable(lua_State *L, int arg, const femlod_hierarchy *x, uint32_t id,
+                           int split, const char *what) {
+    femlod_node_info n;
+    femlod_hierarchy_node(x, id, &n);
+    const char *why = NULL;
+    if (n.child[0] == UINT32_MAX) {
+        why = split ? "is an input vertex: it has no split"
+                    : "is an input vertex: it has no children to collapse";
+    } else if (split && n.state == FEMLOD_NODE_ABOVE) {
+        why = "is above the front (already split)";
+    } else if (split && n.state == FEMLOD_NODE_BELOW) {
+        why = lua_pushfstring(L, "is below the front (inside front node %I)",
+                              lid(front_above(x, id)));
+    } else if (!split && n.state == FEMLOD_NODE_FRONT) {
+        why = "is already collapsed (it is on the front)";
+    } else if (!split && n.state == FEMLOD_NODE_BELOW) {
+        why = lua_pushfstring(L, "is already collapsed (inside front node %I)",
+                              lid(front_above(x, id)));
+    }
+    if (why)
+        luaL_argerror(L, arg, lua_pushfstring(L, "%s%snode %I %s", what ? what : "",
+                                              what ? ": " : "", lid(id), why));
+}
+
+/* h:split(ids) and h:collapse(ids): every id is checked before anything is
+ * done, so an error changes nothing; then each is done in order, an id that
+ * an earlier one already did (as a dependency) being skipped. */
+static int split_or_collapse(lua_State *L, int split) {
+    fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    no_more_arguments(L, 3);
+    femlod_hierarchy *x = h->hier;
+    uint32_t *ids;
+    size_t n;
+    int t = lua_type(L, 2);
+    if (t == LUA_TTABLE) {
+        lua_Integer len = luaL_len(L, 2);
+        if (len < 0 || (lua_Unsigned)len > SIZE_MAX / sizeof *ids)
+            luaL_argerror(L, 2, "list too long");
+        n = (size_t)len;
+        /* Lua-owned: a raise below leaks nothing. */
+        ids = (uint32_t *)lua_newuserdatauv(L, n * sizeof *ids, 0);
+        for (size_t i = 0; i < n; i++) {
+            int et = lua_geti(L, 2, (lua_Integer)i + 1);
+            const char *what = lua_pushfstring(L, "ids[%I]", (lua_Integer)i + 1);
+            lua_insert(L, -2);
+            ids[i] = check_node_id(L, 2, x, et, what);
+            check_operable(L, 2, x, ids[i], split, what);
+            lua_pop(L, 2);
+        }
+    } else if (t == LUA_TNUMBER) {
+        n = 1;
+        ids = (uint32_t *)lua_newuserdatauv(L, sizeof *ids, 0);
+        lua_pushvalue(L, 2);
+        ids[0] = check_node_id(L, 2, x, t, NULL);
+        check_operable(L, 2, x, ids[0], split, NULL);
+        lua_pop(L, 1);
+    } else {
+        return luaL_typeerror(L, 2, "node id or list of node ids");
+    }
+    size_t total = 0;
+    for (size_t i = 0; i < n; i++) {
+        femlod_node_info info;
+        femlod_hierarchy_node(x, ids[i], &info);
+        if (info.state != (split ? FEMLOD_NODE_FRONT : FEMLOD_NODE_ABOVE)) continue;
+        size_t ops = 0;
+        femlod_error err;
+        femlod_status st = split ? femlod_hierarchy_split(x, ids[i], &ops, &err)
+                                 : femlod_hierarchy_collapse(x, ids[i], &ops, &err);
+        if (st != FEMLOD_OK) return fl_lua_raise(L, &err);
+        total += ops;
+    }
+    lua_pushinteger(L, (lua_Integer)total);
+    return 1;
+}
+
+static int hierarchy_split(lua_State *L) { return split_or_collapse(L, 1); }
+static int hierarchy_collapse(lua_State *L) { return split_or_collapse(L, 0); }
+
+/* {====== refine and coarsen with a size function
+ *
+ * The function runs under lua_pcall from inside the core's operation: a
+ * trampoline (size_call_lua) builds the node table and calls it, so that
+ * nothing, not even a memory error in making the table, can raise through
+ * the core. A failure makes call_size return NaN, which stops the operation
+ * with FEMLOD_ECANCELLED and a valid front; the failure is raised once the
+ * core returned. While it runs, the box is busy: the function cannot use or
+ * close the hierarchy it is refining. */
+
+enum { SIZE_OK, SIZE_ERROR, SIZE_BAD_RESULT };
+
+typedef struct size_call {
+    lua_State *L;
+    int fn;                /* stack index of the function */
+    int failed;            /* SIZE_*; on SIZE_ERROR the error value is on the top */
+    const char *got;       /* SIZE_BAD_RESULT: what came back (static string) */
+    femlod_node_info info; /* the node of the current call */
+    double value;          /* its result */
+} size_call;
+
+/* Arguments: the function, the size_call. Raises freely: it runs under pcall. */
+static int size_call_lua(lua_State *L) {
+    size_call *sc = (size_call *)lua_touserdata(L, 2);
+    const femlod_node_info *n = &sc->info;
+    lua_pushvalue(L, 1);
+    lua_pushnumber(L, n->position[0]);
+    lua_pushnumber(L, n->position[1]);
+    lua_pushnumber(L, n->position[2]);
+    push_node(L, n, 0);
+    lua_call(L, 4, 1);
+    if (lua_type(L, -1) != LUA_TNUMBER) {
+        sc->failed = SIZE_BAD_RESULT;
+        sc->got = lua_typename(L, lua_type(L, -1));
+    } else {
+        sc->value = (double)lua_tonumber(L, -1);
+        if (isnan(sc->value)) {
+            sc->failed = SIZE_BAD_RESULT;
+            sc->got = "nan";
+        }
+    }
+    return 0;
+}
+
+/* femlod_size_fn: nothing here may raise. The stack space was reserved
+ * before the core ran; every call leaves the stack as it found it, but the
+ * failing one, which may leave the error value. */
+static double call_size(void *payload, const femlod_node_info *node) {
+    size_call *sc = (size_call *)payload;
+    lua_State *L = sc->L;
+    if (sc->failed != SIZE_OK) return NAN;
+    sc->info = *node;
+    lua_pushcfunction(L, size_call_lua); /* a light C function: allocates nothing */
+    lua_pushvalue(L, sc->fn);
+    lua_pushlightuserdata(L, sc);
+    if (lua_pcall(L, 2, 0, 0) != LUA_OK) {
+        sc->failed = SIZE_ERROR;
+        return NAN;
+    }
+    return sc->failed == SIZE_OK ? sc->value : NAN;
+}
+
+typedef femlod_status (*lod_op)(femlod_hierarchy *, double, femlod_size_fn, void *, size_t *,
+                                femlod_error *);
+
+/* h:refine(size | fn) and h:coarsen(size | fn). */
+static int refine_or_coarsen(lua_State *L, lod_op op) {
+    fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    int t = lua_type(L, 2);
+    double size = 0.0;
+    size_call sc = {L, 0, SIZE_OK, NULL, {0}, 0.0};
+    if (t == LUA_TNUMBER) {
+        size = (double)lua_tonumber(L, 2);
+        luaL_argcheck(L, !isnan(size), 2, "size is NaN");
+    } else if (t == LUA_TFUNCTION) {
+        sc.fn = 2;
+    } else {
+        return luaL_typeerror(L, 2, "number or function");
+    }
+    no_more_arguments(L, 3);
+    luaL_checkstack(L, 4, NULL); /* for call_size, which must not raise */
+    size_t ops = 0;
+    femlod_error err;
+    h->busy = 1;
+    femlod_status st = op(h->hier, size, sc.fn ? call_size : NULL, &sc, &ops, &err);
+    h->busy = 0;
+    if (sc.failed == SIZE_ERROR) return lua_error(L);
+    if (sc.failed == SIZE_BAD_RESULT)
+        return luaL_argerror(L, 2, lua_pushfstring(L, "size function returned %s for node %I "
+                                                      "(number expected)",
+                                                   sc.got, lid(sc.info.id)));
+    if (st != FEMLOD_OK) return fl_lua_raise(L, &err);
+    lua_pushinteger(L, (lua_Integer)ops);
+    return 1;
+}
+
+static int hierarchy_refine(lua_State *L) { return refine_or_coarsen(L, femlod_hierarchy_refine); }
+static int hierarchy_coarsen(lua_State *L) {
+    return refine_or_coarsen(L, femlod_hierarchy_coarsen);
+}
+
+/* }====== */
+
+static int hierarchy_node(lua_State *L) {
+    fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    no_more_arguments(L, 3);
+    int t = lua_type(L, 2);
+    lua_pushvalue(L, 2);
+    uint32_t id = check_node_id(L, 2, h->hier, t, NULL);
+    femlod_node_info n;
+    femlod_hierarchy_node(h->hier, id, &n);
+    push_node(L, &n, 1);
+    return 1;
+}
+
+/* h:validate(): true, or raises with the violation (the core's message,
+ * whose node and face ids are the C API's, 0-based). */
+static int hierarchy_validate(lua_State *L) {
+    fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    femlod_error err;
+    if (femlod_hierarchy_validate(h->hier, &err) != FEMLOD_OK) {
+        luaL_where(L, 1);
+        lua_pushfstring(L, "invalid hierarchy (0-based C ids): %s", err.message);
+        lua_concat(L, 2);
+        return lua_error(L);
+    }
+    lua_pushboolean(L, 1);
+    return 1;
+}
+
+static int hierarchy_save(lua_State *L) {
+    fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    const char *path = check_path(L, 2);
+    no_more_arguments(L, 3);
+    femlod_error err;
+    if (femlod_hierarchy_save(h->hier, path, h->has_result ? &h->result : NULL, &err) != FEMLOD_OK)
+        return fl_lua_raise(L, &err);
+    return 0;
 }
 
 /* A threshold in force, or false when it is off (negative). */
@@ -366,7 +775,11 @@ static void set_threshold(lua_State *L, const char *key, double v) {
 }
 
 static int hierarchy_stats(lua_State *L) {
-    const femlod_simplify_result *r = &fl_lhierarchy_check(L, 1)->result;
+    const fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    if (!h->has_result)
+        return luaL_error(L, "this femlod.Hierarchy has no simplification statistics "
+                             "(its file was saved without them)");
+    const femlod_simplify_result *r = &h->result;
     lua_createtable(L, 0, 12);
     set_integer(L, "triangles", r->triangles);
     set_integer(L, "vertices", r->vertices);
@@ -401,36 +814,42 @@ static int hierarchy_stats(lua_State *L) {
 
 static int hierarchy_collapses(lua_State *L) {
     const fl_hierarchy *h = fl_lhierarchy_check(L, 1);
-    lua_pushinteger(L, (lua_Integer)femlod_collapse_log_count(h->log));
+    lua_pushinteger(L, (lua_Integer)(femlod_hierarchy_node_count(h->hier) -
+                                     femlod_hierarchy_input_vertices(h->hier)));
     return 1;
 }
 
 static int hierarchy_input_vertices(lua_State *L) {
     const fl_hierarchy *h = fl_lhierarchy_check(L, 1);
-    lua_pushinteger(L, (lua_Integer)femlod_collapse_log_input_vertices(h->log));
+    lua_pushinteger(L, (lua_Integer)femlod_hierarchy_input_vertices(h->hier));
     return 1;
 }
 
 static int hierarchy_log_bytes(lua_State *L) {
     const fl_hierarchy *h = fl_lhierarchy_check(L, 1);
-    lua_pushinteger(L, (lua_Integer)femlod_collapse_log_bytes(h->log));
+    lua_pushinteger(L, (lua_Integer)h->log_bytes);
     return 1;
 }
 
-/* __gc, __close and close(): one release that tolerates a closed box. */
+/* __gc, __close and close(): one release that tolerates a closed box. A
+ * busy box is on the stack of its refine, so the collector never sees it;
+ * close() from its own size function is refused. */
 static int hierarchy_gc(lua_State *L) {
-    hierarchy_release((fl_hierarchy *)luaL_checkudata(L, 1, FL_HIERARCHY_MT));
+    fl_hierarchy *h = (fl_hierarchy *)luaL_checkudata(L, 1, FL_HIERARCHY_MT);
+    if (h->busy)
+        return luaL_error(L, "attempt to close a femlod.Hierarchy inside its own size function");
+    hierarchy_release(h);
     return 0;
 }
 
 static int hierarchy_tostring(lua_State *L) {
     const fl_hierarchy *h = (const fl_hierarchy *)luaL_checkudata(L, 1, FL_HIERARCHY_MT);
-    if (!h->mesh)
+    if (!h->hier)
         lua_pushliteral(L, "femlod.Hierarchy (closed)");
     else
-        lua_pushfstring(L, "femlod.Hierarchy (%I collapses, %I triangles)",
-                        (lua_Integer)femlod_collapse_log_count(h->log),
-                        (lua_Integer)femlod_mesh_triangle_count(h->mesh));
+        lua_pushfstring(L, "femlod.Hierarchy (%I nodes, %I triangles on the front)",
+                        (lua_Integer)femlod_hierarchy_node_count(h->hier),
+                        (lua_Integer)femlod_hierarchy_front_triangles(h->hier));
     return 1;
 }
 
@@ -438,6 +857,15 @@ static int hierarchy_tostring(lua_State *L) {
 
 static const luaL_Reg hierarchy_methods[] = {
     {"mesh", hierarchy_mesh},
+    {"front", hierarchy_front},
+    {"refine", hierarchy_refine},
+    {"coarsen", hierarchy_coarsen},
+    {"split", hierarchy_split},
+    {"collapse", hierarchy_collapse},
+    {"counts", hierarchy_counts},
+    {"node", hierarchy_node},
+    {"validate", hierarchy_validate},
+    {"save", hierarchy_save},
     {"stats", hierarchy_stats},
     {"collapses", hierarchy_collapses},
     {"input_vertices", hierarchy_input_vertices},
@@ -470,4 +898,6 @@ void fl_lhierarchy_open(lua_State *L) {
     lua_pop(L, 2);
     lua_pushcfunction(L, lib_simplify);
     lua_setfield(L, -2, "simplify");
+    lua_pushcfunction(L, lib_load_hierarchy);
+    lua_setfield(L, -2, "load_hierarchy");
 }

@@ -14,6 +14,8 @@
 #include "lfemlod.h"
 #include "lopts.h"
 
+#include "core.h" /* fl_format_double: numbers in extras, whatever the locale */
+
 #include <limits.h>
 #include <math.h>
 #include <stdint.h>
@@ -34,7 +36,7 @@ femlod_mesh *fl_lmesh_check(lua_State *L, int arg) {
 
 /* The format option: names as femlod_format_name spells them. */
 static const char *const format_names[] = {"obj", "stl", "stl_ascii", "stl_binary", "off",
-                                           "ply", "ply_ascii", "ply_binary", NULL};
+                                           "ply", "ply_ascii", "ply_binary", "gltf", "glb", NULL};
 static const char *const io_keys[] = {"format", NULL};
 
 static femlod_format check_format(lua_State *L, int arg) {
@@ -195,11 +197,102 @@ static int lib_mesh(lua_State *L) {
  * Methods
  * ===================================================================== */
 
+/* save's options: format, and for glTF color_by, normals and extras. */
+static const char *const save_keys[] = {"format", "color_by", "normals", "extras", NULL};
+/* In femlod_color_by order. */
+static const char *const color_names[] = {"none", "stretch", "size", "valence", NULL};
+
+/* Appends s[0..n) as a JSON string. */
+static void add_json_string(luaL_Buffer *b, const char *s, size_t n) {
+    luaL_addchar(b, '"');
+    for (size_t i = 0; i < n; i++) {
+        unsigned char c = (unsigned char)s[i];
+        if (c == '"' || c == '\\') {
+            luaL_addchar(b, '\\');
+            luaL_addchar(b, (char)c);
+        } else if (c < 0x20) {
+            char e[8];
+            snprintf(e, sizeof e, "\\u%04x", (unsigned)c);
+            luaL_addstring(b, e);
+        } else {
+            luaL_addchar(b, (char)c);
+        }
+    }
+    luaL_addchar(b, '"');
+}
+
+/* The extras table on the top of the stack (string keys; string, number or
+ * boolean values) as a JSON object; pushes it and returns it. Members go
+ * in any order: the writer sorts them. */
+static const char *extras_json(lua_State *L, const fl_opts *o) {
+    int t = lua_gettop(L);
+    if (!lua_istable(L, t))
+        fl_opts_error(o, "extras",
+                      lua_pushfstring(L, "table expected, got %s", luaL_typename(L, t)));
+    lua_newtable(L);
+    int parts = lua_gettop(L);
+    lua_Integer n = 0;
+    lua_pushnil(L);
+    while (lua_next(L, t)) {
+        int k = lua_gettop(L) - 1, v = k + 1;
+        if (lua_type(L, k) != LUA_TSTRING)
+            fl_opts_error(o, "extras", lua_pushfstring(L, "keys must be strings, got %s",
+                                                       luaL_typename(L, k)));
+        size_t klen;
+        const char *key = lua_tolstring(L, k, &klen);
+        luaL_Buffer b;
+        luaL_buffinit(L, &b);
+        add_json_string(&b, key, klen);
+        luaL_addchar(&b, ':');
+        if (lua_type(L, v) == LUA_TSTRING) {
+            size_t len;
+            const char *str = lua_tolstring(L, v, &len);
+            add_json_string(&b, str, len);
+        } else if (lua_type(L, v) == LUA_TBOOLEAN) {
+            luaL_addstring(&b, lua_toboolean(L, v) ? "true" : "false");
+        } else if (lua_isinteger(L, v)) {
+            char num[32];
+            snprintf(num, sizeof num, LUA_INTEGER_FMT, (LUAI_UACINT)lua_tointeger(L, v));
+            luaL_addstring(&b, num);
+        } else if (lua_type(L, v) == LUA_TNUMBER && isfinite(lua_tonumber(L, v))) {
+            char num[40];
+            fl_format_double(num, sizeof num, (double)lua_tonumber(L, v));
+            luaL_addstring(&b, num);
+        } else {
+            const char *got = luaL_typename(L, v);
+            fl_opts_error(o, "extras",
+                          lua_pushfstring(L,
+                                          "%s: string, finite number or boolean expected, got %s",
+                                          key, got));
+        }
+        luaL_pushresult(&b);
+        lua_rawseti(L, parts, ++n);
+        lua_pop(L, 1); /* the value; the key stays for lua_next */
+    }
+    luaL_Buffer b;
+    luaL_buffinit(L, &b);
+    luaL_addchar(&b, '{');
+    for (lua_Integer i = 1; i <= n; i++) {
+        if (i > 1) luaL_addchar(&b, ',');
+        lua_rawgeti(L, parts, i);
+        luaL_addvalue(&b);
+    }
+    luaL_addchar(&b, '}');
+    luaL_pushresult(&b);
+    return lua_tostring(L, -1);
+}
+
 static int mesh_save(lua_State *L) {
     const femlod_mesh *m = fl_lmesh_check(L, 1);
     const char *path = check_path(L, 2);
     femlod_write_options opts = FEMLOD_WRITE_OPTIONS_INIT;
-    opts.format = check_format(L, 3);
+    fl_opts o;
+    fl_opts_open(&o, L, 3, save_keys);
+    int f = fl_opts_enum(&o, "format", format_names, -1);
+    opts.format = f < 0 ? FEMLOD_FORMAT_AUTO : femlod_format_from_name(format_names[f]);
+    opts.color_by = (femlod_color_by)fl_opts_enum(&o, "color_by", color_names, 0);
+    opts.normals = fl_opts_boolean(&o, "normals", 0);
+    if (fl_opts_push(&o, "extras") != LUA_TNIL) opts.extras = extras_json(L, &o);
     femlod_error err;
     if (femlod_mesh_write(m, path, &opts, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
     return 0;
@@ -369,6 +462,56 @@ static int mesh_triangles(lua_State *L) {
     return 1;
 }
 
+/* {=== m:curvature{radius = r} (femlod_mesh_curvature): per-vertex arrays,
+ * 1-based, { k1 = {...}, k2 = {...}, kappa = {...}, dir1 = {{x,y,z},...},
+ * dir2 = {...} }. The C results go into one Lua-owned buffer, so a raise
+ * while the tables are built leaks nothing. */
+static const char *const curvature_keys[] = {"radius", NULL};
+
+static void push_numbers(lua_State *L, const double *v, size_t n) {
+    lua_createtable(L, size_hint(n), 0);
+    for (size_t i = 0; i < n; i++) {
+        lua_pushnumber(L, v[i]);
+        lua_rawseti(L, -2, (lua_Integer)i + 1);
+    }
+}
+
+static void push_points(lua_State *L, const double *v, size_t n) {
+    lua_createtable(L, size_hint(n), 0);
+    for (size_t i = 0; i < n; i++) {
+        push_point(L, v + 3 * i);
+        lua_rawseti(L, -2, (lua_Integer)i + 1);
+    }
+}
+
+static int mesh_curvature(lua_State *L) {
+    const femlod_mesh *m = fl_lmesh_check(L, 1);
+    fl_opts o;
+    fl_opts_open(&o, L, 2, curvature_keys);
+    femlod_curvature_options opts = FEMLOD_CURVATURE_OPTIONS_INIT;
+    opts.radius = (double)fl_opts_number(&o, "radius", 0.0);
+    size_t nv = femlod_mesh_vertex_count(m);
+    if (nv > SIZE_MAX / (9 * sizeof(double))) return luaL_error(L, "curvature: mesh too large");
+    double *k1 = (double *)lua_newuserdatauv(L, 9 * nv * sizeof(double), 0);
+    double *k2 = k1 + nv, *kappa = k2 + nv, *dir1 = kappa + nv, *dir2 = dir1 + 3 * nv;
+    femlod_error err;
+    if (femlod_mesh_curvature(m, &opts, k1, k2, kappa, dir1, dir2, &err) != FEMLOD_OK)
+        return fl_lua_raise(L, &err);
+    lua_createtable(L, 0, 5);
+    push_numbers(L, k1, nv);
+    lua_setfield(L, -2, "k1");
+    push_numbers(L, k2, nv);
+    lua_setfield(L, -2, "k2");
+    push_numbers(L, kappa, nv);
+    lua_setfield(L, -2, "kappa");
+    push_points(L, dir1, nv);
+    lua_setfield(L, -2, "dir1");
+    push_points(L, dir2, nv);
+    lua_setfield(L, -2, "dir2");
+    return 1;
+}
+/* }=== */
+
 /* __gc, __close and close(): one release that tolerates a closed box, since
  * __close runs at scope exit even after an explicit close(), and __gc after
  * both. */
@@ -407,6 +550,7 @@ static const luaL_Reg mesh_methods[] = {
     {"copy", mesh_copy},
     {"positions", mesh_positions},
     {"triangles", mesh_triangles},
+    {"curvature", mesh_curvature},
     {"close", mesh_gc},
     {NULL, NULL},
 };

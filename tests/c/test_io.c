@@ -143,12 +143,13 @@ static int read_file(const char *path, char **data, size_t *size) {
 static void test_format_names(void) {
     static const femlod_format all[] = {
         FEMLOD_FORMAT_OBJ, FEMLOD_FORMAT_STL, FEMLOD_FORMAT_STL_ASCII, FEMLOD_FORMAT_STL_BINARY,
-        FEMLOD_FORMAT_OFF, FEMLOD_FORMAT_PLY, FEMLOD_FORMAT_PLY_ASCII, FEMLOD_FORMAT_PLY_BINARY};
+        FEMLOD_FORMAT_OFF, FEMLOD_FORMAT_PLY, FEMLOD_FORMAT_PLY_ASCII, FEMLOD_FORMAT_PLY_BINARY,
+        FEMLOD_FORMAT_GLTF, FEMLOD_FORMAT_GLB};
     for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
         CHECK(femlod_format_from_name(femlod_format_name(all[i])) == all[i]);
     CHECK(strcmp(femlod_format_name(FEMLOD_FORMAT_STL_ASCII), "stl_ascii") == 0);
     CHECK(strcmp(femlod_format_name(FEMLOD_FORMAT_PLY_BINARY), "ply_binary") == 0);
-    CHECK(femlod_format_from_name("gltf") == FEMLOD_FORMAT_AUTO);
+    CHECK(femlod_format_from_name("gltf2") == FEMLOD_FORMAT_AUTO);
     CHECK(femlod_format_from_name(NULL) == FEMLOD_FORMAT_AUTO);
     CHECK(femlod_format_from_path("a/b/part.obj") == FEMLOD_FORMAT_OBJ);
     CHECK(femlod_format_from_path("PART.STL") == FEMLOD_FORMAT_STL);
@@ -164,7 +165,7 @@ static void test_format_names(void) {
     CHECK(femlod_mesh_read(&m, "nowhere/mesh.xyz", NULL, &err) == FEMLOD_EINPUT);
     CHECK(m == NULL);
     CHECK_STR_HAS(err.message,
-                  "mesh.xyz: unknown file extension; supported: .obj, .stl, .off, .ply");
+                  "mesh.xyz: unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb");
     CHECK(femlod_mesh_read_memory(&m, "v 0 0 0", 7, NULL, NULL, &err) == FEMLOD_EINPUT);
     CHECK_STR_HAS(err.message, "(memory): unknown file extension");
     /* A name with a known extension is enough for memory reads. */
@@ -1035,7 +1036,8 @@ static void test_atomic_writes(void) {
             setrlimit(RLIMIT_FSIZE, &old_limit);
             CHECK(s == FEMLOD_EIO && err.status == FEMLOD_EIO);
             CHECK_STR_HAS(err.message, "out.obj: cannot write: File too large");
-            femlod_write_options bin = {FEMLOD_FORMAT_PLY_BINARY};
+            femlod_write_options bin = FEMLOD_WRITE_OPTIONS_INIT;
+            bin.format = FEMLOD_FORMAT_PLY_BINARY;
             CHECK(setrlimit(RLIMIT_FSIZE, &limit) == 0);
             s = femlod_mesh_write(big, target, &bin, &err);
             setrlimit(RLIMIT_FSIZE, &old_limit);
@@ -1070,9 +1072,10 @@ static void test_atomic_writes(void) {
     path_in(p, sizeof p, dir, "out.xyz");
     CHECK(femlod_mesh_write(small, p, NULL, &err) == FEMLOD_EINPUT);
     CHECK_STR_HAS(err.message,
-                  "out.xyz: unknown file extension; supported: .obj, .stl, .off, .ply");
+                  "out.xyz: unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb");
     CHECK(access(p, F_OK) != 0);
-    femlod_write_options wo = {FEMLOD_FORMAT_PLY_ASCII};
+    femlod_write_options wo = FEMLOD_WRITE_OPTIONS_INIT;
+    wo.format = FEMLOD_FORMAT_PLY_ASCII;
     CHECK(femlod_mesh_write(small, p, &wo, &err) == FEMLOD_OK);
     femlod_mesh *back = read_ok(p, FEMLOD_FORMAT_PLY);
     CHECK(same_mesh(small, back));
@@ -1172,6 +1175,32 @@ static void test_torture(void) {
 
 /* }====== */
 
+/* Writing through a symbolic link replaces the file it points to and keeps
+ * the link; a dangling link is an error that names the path. */
+static void test_symlink_writes(void) {
+    char real[700], link[700], dangling[700];
+    path_in(real, sizeof real, scratch, "real.obj");
+    path_in(link, sizeof link, scratch, "link.obj");
+    path_in(dangling, sizeof dangling, scratch, "dangling.obj");
+    femlod_mesh *m = shape_tetrahedron(), *back = NULL;
+    femlod_error err;
+    CHECK(femlod_mesh_write(m, real, NULL, &err) == FEMLOD_OK);
+    CHECK(symlink("real.obj", link) == 0);
+    femlod_mesh *p = shape_plane(2);
+    CHECK(femlod_mesh_write(p, link, NULL, &err) == FEMLOD_OK);
+    struct stat st;
+    CHECK(lstat(link, &st) == 0 && S_ISLNK(st.st_mode));
+    CHECK(femlod_mesh_read(&back, real, NULL, &err) == FEMLOD_OK);
+    CHECK(back && femlod_mesh_triangle_count(back) == 8);
+    femlod_mesh_free(back);
+    CHECK(symlink("nowhere/x.obj", dangling) == 0);
+    CHECK(femlod_mesh_write(p, dangling, NULL, &err) == FEMLOD_EIO);
+    CHECK_STR_HAS(err.message, "dangling.obj: cannot follow symbolic link");
+    CHECK(lstat(dangling, &st) == 0 && S_ISLNK(st.st_mode));
+    femlod_mesh_free(m);
+    femlod_mesh_free(p);
+}
+
 static void remove_scratch(void) {
     char p[700];
     DIR *d = opendir(scratch);
@@ -1208,6 +1237,7 @@ int main(void) {
     test_bad_files();
     test_round_trips();
     test_atomic_writes();
+    test_symlink_writes();
     test_torture();
     test_locale();
     remove_scratch();

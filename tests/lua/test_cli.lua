@@ -43,7 +43,8 @@ do
   T.eq(err, "", "--help: nothing on stderr")
   for _, want in ipairs { "^usage: femlod %[options%] COMMAND", "\n  run RECIPE%.lua ", "\n  info MESH ",
     "\n  convert IN OUT ", "\n  simplify IN OUT ", "%-%-target N | %-%-ratio R", "%-%-min%-stretch X",
-    "%-%-max%-normal%-change DEG", "%-%-keep%-boundary", "%-%-lock I,J,K", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-%-quiet ", "\n  %-%-traceback ",
+    "%-%-max%-normal%-change DEG", "%-%-keep%-boundary", "%-%-lock I,J,K", "%-%-hierarchy PART%.flh",
+    "\n  lod PART%.flh OUT %-%-size T\n", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-%-quiet ", "\n  %-%-traceback ",
     "Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded" } do
     T.check(out:find(want), "--help mentions " .. want)
   end
@@ -77,9 +78,9 @@ usage("femlod: expected name=value, got '=3'", "-e", "", "=3")
 usage("femlod: parameter given twice: 'a=2'", "-e", "", "a=1", "a=2")
 usage("femlod: unknown parameter 'bogus' (valid: format, reference, report)", "info", "x.obj", "bogus=1")
 usage("femlod: report: unknown report 'xml' (valid: text, row, fields)", "info", "x.obj", "report=xml")
-usage("femlod: format: unknown format 'xyz' (valid: obj, stl, stl_ascii, stl_binary, off, ply, ply_ascii, ply_binary)",
+usage("femlod: format: unknown format 'xyz' (valid: obj, stl, stl_ascii, stl_binary, off, ply, ply_ascii, ply_binary, gltf, glb)",
   "convert", "a.obj", "b.obj", "format=xyz")
-usage("femlod: unknown parameter 'formt' (valid: format, input_format)", "convert", "a.obj", "b.obj", "formt=obj")
+usage("femlod: unknown parameter 'formt' (valid: format, input_format, color_by, normals)", "convert", "a.obj", "b.obj", "formt=obj")
 -- Options come first: after the command they are operands or pairs.
 usage("femlod: expected name=value, got '--quiet'", "-e", "", "--quiet")
 -- }======
@@ -103,7 +104,7 @@ do
   code, out, err = run("run", p, "unused=1")
   T.eq(code, 1, "load error exit 1")
   -- varargs are the pairs: femlod.load("unused=1") fails with an unknown extension
-  T.eq(err, "femlod: " .. p .. ":2: unused=1: unknown file extension; supported: .obj, .stl, .off, .ply (or give the format)\n",
+  T.eq(err, "femlod: " .. p .. ":2: unused=1: unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb (or give the format)\n",
     "load error names recipe line and file")
 
   -- An error inside a function is placed where it happened; --traceback adds the stack.
@@ -269,7 +270,7 @@ do
   T.check(out:find("^cli_fandisk%.mesh: 12946 triangles"), "info format=obj output")
   code, out, err = run("info", copy)
   T.eq(code, 1, "info of an unknown extension fails")
-  T.eq(err, "femlod: " .. copy .. ": unknown file extension; supported: .obj, .stl, .off, .ply (or give the format)\n",
+  T.eq(err, "femlod: " .. copy .. ": unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb (or give the format)\n",
     "info error has no recipe position")
   code, out, err = run("info", path("missing.obj"))
   T.eq(code, 1, "info of a missing file")
@@ -425,7 +426,8 @@ do
   simplify_usage("femlod: --lock: vertex 6476 out of range (1..6475)", "--lock", "1,6476")
   simplify_usage("femlod: option given twice: 'target'", "--target", "100", "target=200")
   simplify_usage("femlod: unknown parameter 'targt' (valid: target, ratio, tolerance, max_deviation, min_stretch, "
-    .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, lock)",
+    .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, lock, "
+    .. "hierarchy)",
     "targt=100")
   simplify_usage("femlod: expected name=value, got '3000'", "--keep-boundary", "3000")
   usage("femlod: missing an input and an output file", "simplify", fandisk)
@@ -448,6 +450,134 @@ do
   T.eq(code, 1, "simplify into a missing folder fails")
   T.eq(text, "", "no report when OUT cannot be written")
   T.check(not T.exists(P.tmp .. "/no_such_dir/x.obj"), "nothing written")
+end
+-- }======
+
+-- {====== simplify --hierarchy and lod
+do
+  local out, flh = path("hier_2000.obj"), path("hier.flh")
+  os.remove(flh)
+  local code, text, err = run("simplify", fandisk, out, "--target", "2000", "--hierarchy", flh)
+  T.eq(code, 0, "simplify --hierarchy: " .. err)
+  T.eq(err, "", "simplify --hierarchy: nothing on stderr")
+  local h = femlod.load_hierarchy(flh)
+  local c = h:counts()
+  T.eq(c.triangles, 2000, "the .flh holds the simplification result's front")
+  T.eq(c.input_vertices, 6475, "and every input vertex")
+  T.check(text:find("\n" .. out:gsub("%p", "%%%0") .. ": 2000 triangles, %d+ vertices %(obj%)\n"
+    .. flh:gsub("%p", "%%%0") .. ": " .. c.nodes .. " nodes: 6475 input vertices, " .. c.collapses
+    .. " collapses %(hierarchy%)\n$"), "simplify --hierarchy: the hierarchy's line last: " .. text)
+  T.eq(h:stats().triangles, 2000, "the .flh keeps the stats")
+  local t_in = femlod.load(fandisk):triangles()
+  -- hierarchy= is --hierarchy; OUT is the front mesh the .flh gives.
+  local flh2, out2 = path("hier2.flh"), path("hier2_2000.obj")
+  T.eq(run("--quiet", "simplify", fandisk, out2, "target=2000", "hierarchy=" .. flh2), 0, "hierarchy=PATH")
+  T.check(T.readfile(out2) == T.readfile(out), "hierarchy=PATH: the same OUT")
+  T.eq(femlod.load_hierarchy(flh2):counts().nodes, c.nodes, "hierarchy=PATH: the same hierarchy")
+
+  -- lod: the simplification result refined at a uniform threshold.
+  local lod_inf, lod0, lod3 = path("lod_inf.obj"), path("lod_0.obj"), path("lod_003.obj")
+  code, text, err = run("lod", flh, lod_inf, "--size", "inf")
+  T.eq(code, 0, "lod --size inf: " .. err)
+  T.check(T.readfile(lod_inf) == T.readfile(out), "lod --size inf: byte-identical to simplify's OUT")
+  code, text = run("lod", flh, lod0, "--size", "0")
+  T.eq(code, 0, "lod --size 0")
+  local m0 = femlod.load(lod0)
+  T.eq(m0:counts().triangles, 12946, "lod --size 0: every input triangle")
+  local same = true
+  for i, t in ipairs(m0:triangles()) do
+    if t[1] ~= t_in[i][1] or t[2] ~= t_in[i][2] or t[3] ~= t_in[i][3] then same = false end
+  end
+  T.check(same, "lod --size 0: the input's triangles (same numbering)")
+  T.eq(femlod.load(lod0):quality().stretch_avg, femlod.load(fandisk):quality().stretch_avg, "lod --size 0: the input's quality")
+  code, text, err = run("lod", flh, lod3, "--size", "0.03")
+  T.eq(code, 0, "lod --size 0.03")
+  T.eq(err, "", "lod: nothing on stderr")
+  local m3 = femlod.load(lod3)
+  local n3 = m3:counts().triangles
+  T.check(n3 > 2000 and n3 < 12946, "lod --size 0.03: between the two: " .. n3)
+  local q3 = m3:quality()
+  T.eq(text, table.concat({
+    "model (H x W x D) | state | elements | stretch (avg, min) | size (max) | valence (max)",
+    string.format("cli_hier.flh (0.9206 x 0.5111 x 1) | size 0.03 | %d | %.3f, %.3f | %.4g | %d", n3, q3.stretch_avg,
+      q3.stretch_min, q3.size_max, q3.valence_max),
+    string.format("%d splits from the simplification result", (n3 - 2000) // 2),
+    string.format("%s: %d triangles, %d vertices (obj)", lod3, n3, m3:counts().vertices), "" }, "\n"),
+    "lod prints its Table 1 row, the splits and the summary")
+  local g = femlod.load_hierarchy(flh)
+  g:refine(0.03)
+  T.eq(g:counts().triangles, n3, "lod --size T is load_hierarchy + refine(T)")
+  -- The output depends on the file's hierarchy and T only, not on its front.
+  g:refine(0.005)
+  local flh_fine = path("hier_fine.flh")
+  g:save(flh_fine)
+  local lod3b = path("lod_003b.obj")
+  T.eq(run("--quiet", "lod", flh_fine, lod3b, "size=0.03"), 0, "lod size=T, from a refined front")
+  T.check(T.readfile(lod3b) == T.readfile(lod3), "lod: the same mesh whatever front the file holds")
+  T.eq(run("--quiet", "lod", flh, lod3b, "--size=0.03"), 0, "lod --size=T")
+  T.check(T.readfile(lod3b) == T.readfile(lod3), "--size=T is --size T")
+  code, text = run("--quiet", "lod", flh, lod3b, "--size", "0.03")
+  T.eq(text, "", "lod --quiet: nothing printed")
+  local glb = path("lod.stl")
+  code, text = run("lod", flh, glb, "--size", "0.03")
+  T.check(text:find(glb:gsub("%p", "%%%0") .. ": %d+ triangles, %d+ vertices %(stl%)\n$"), "lod: the format from OUT")
+
+  -- Usage errors: exit 2, nothing written.
+  local never = path("never_lod.obj")
+  os.remove(never)
+  local function lod_usage(first_line, ...)
+    usage(first_line, "lod", flh, never, ...)
+    T.check(not T.exists(never), "no output after: " .. table.concat({ ... }, " "))
+  end
+  lod_usage("femlod: lod: --size T is required")
+  lod_usage("femlod: --size needs a value", "--size")
+  lod_usage("femlod: --size: number >= 0 or inf expected, got 'fine'", "--size", "fine")
+  lod_usage("femlod: --size: number >= 0 or inf expected, got '-1'", "--size", "-1")
+  lod_usage("femlod: size: number >= 0 or inf expected, got ''", "size=")
+  lod_usage("femlod: unknown option '--target'", "--target", "100")
+  lod_usage("femlod: unknown parameter 'target' (valid: size)", "target=100")
+  lod_usage("femlod: option given twice: 'size'", "--size", "1", "size=2")
+  lod_usage("femlod: expected name=value, got '0.03'", "0.03")
+  usage("femlod: missing a hierarchy file and an output file", "lod", flh)
+  usage("femlod: lod: PART.flh and OUT come first, then --size T", "lod", "--size", "1", flh, never)
+  usage("femlod: --hierarchy needs a value", "simplify", fandisk, never, "--hierarchy")
+  usage("femlod: hierarchy: file name expected, got ''", "simplify", fandisk, never, "hierarchy=")
+  usage("femlod: option given twice: 'hierarchy'", "simplify", fandisk, never, "--hierarchy", flh, "hierarchy=x")
+  T.check(not T.exists(never), "no output after the usage errors")
+
+  -- Failures: exit 1 with the file's message, no output.
+  code, text, err = run("lod", path("missing.flh"), never, "--size", "1")
+  T.eq(code, 1, "lod of a missing file")
+  T.eq(err, "femlod: " .. path("missing.flh") .. ": cannot open: No such file or directory\n", "lod: missing file text")
+  code, text, err = run("lod", fandisk, never, "--size", "1")
+  T.eq(code, 1, "lod of a mesh file")
+  T.eq(err, "femlod: " .. fandisk .. ": byte 0: not a femlod hierarchy file\n", "lod: foreign file text")
+  local damaged = path("damaged.flh")
+  local bytes = T.readfile(flh)
+  T.writefile(damaged, bytes:sub(1, 100) .. string.char(bytes:byte(101) ~ 1) .. bytes:sub(102))
+  code, text, err = run("lod", damaged, never, "--size", "1")
+  T.eq(code, 1, "lod of a damaged file")
+  T.eq(err, "femlod: " .. damaged .. ": checksum mismatch: the file is damaged\n", "lod: damaged file text")
+  T.eq(text, "", "no report after a failure")
+  T.check(not T.exists(never), "no output after the failures")
+  code, text, err = run("simplify", fandisk, never, "--target", "2000", "--hierarchy", P.tmp .. "/no_such_dir/x.flh")
+  T.eq(code, 1, "simplify --hierarchy into a missing folder fails")
+  T.check(not T.exists(never), "OUT is written after the hierarchy: not written when the hierarchy fails")
+
+  -- The example recipe.
+  local ex_out = path("lod_example")
+  os.execute("mkdir -p " .. quote(ex_out))
+  os.remove(ex_out .. "/fandisk_lod.obj")
+  code, text, err = run(P.examples .. "/lod.lua", "out=" .. ex_out)
+  T.eq(code, 0, "examples/lod.lua runs: " .. err)
+  T.eq(err, "", "lod.lua: nothing on stderr")
+  T.check(text:find("^model %(H x W x D%) | state | elements"), "lod.lua prints Table 1: " .. text)
+  T.check(text:find("\nfandisk%.obj %([^)]*%) | original | 12946 | "), "lod.lua: the original's row")
+  T.check(text:find("\nfandisk%.obj %([^)]*%) | simplified | 2000 | "), "lod.lua: the simplified row")
+  local refined = femlod.load(ex_out .. "/fandisk_lod.obj"):counts().triangles
+  T.check(refined > 2000 and refined < 12946, "lod.lua wrote the refined mesh: " .. refined)
+  T.check(text:find("\nfandisk%.obj %([^)]*%) | refined near a corner | " .. refined .. " | "), "lod.lua: the refined row")
+  T.check(T.exists(ex_out .. "/fandisk.flh"), "lod.lua saved the hierarchy")
 end
 -- }======
 

@@ -250,6 +250,64 @@ do
 end
 -- }======
 
+-- {====== curvature: a sphere of radius 2 from a subdivided octahedron
+do
+  local R = 2
+  local oct = femlod.mesh {
+    positions = { { 1, 0, 0 }, { -1, 0, 0 }, { 0, 1, 0 }, { 0, -1, 0 }, { 0, 0, 1 }, { 0, 0, -1 } },
+    triangles = { { 1, 3, 5 }, { 3, 2, 5 }, { 2, 4, 5 }, { 4, 1, 5 },
+                  { 3, 1, 6 }, { 2, 3, 6 }, { 4, 2, 6 }, { 1, 4, 6 } }, -- outward
+  }
+  local fine = oct:subdivide(4)
+  local pts = fine:positions()
+  for _, p in ipairs(pts) do
+    local l = math.sqrt(p[1] ^ 2 + p[2] ^ 2 + p[3] ^ 2)
+    for k = 1, 3 do p[k] = R * p[k] / l end
+  end
+  local sphere = femlod.mesh { positions = pts, triangles = fine:triangles() }
+  local n = sphere:counts().vertices
+  for _, opts in ipairs { false, { radius = 0.3 } } do
+    local c = opts and sphere:curvature(opts) or sphere:curvature()
+    local what = opts and "radius 0.3" or "default radius"
+    T.eq(#c.k1, n, what .. ": one k1 per vertex"); T.eq(#c.k2, n, what .. ": k2")
+    T.eq(#c.kappa, n, what .. ": kappa"); T.eq(#c.dir1, n, what .. ": dir1"); T.eq(#c.dir2, n, what .. ": dir2")
+    local worst, frame_ok = 0, true
+    for v = 1, n do
+      worst = math.max(worst, math.abs(c.k1[v] * R - 1), math.abs(c.k2[v] * R - 1))
+      local d1, d2, p = c.dir1[v], c.dir2[v], pts[v]
+      local function dot(a, b) return a[1] * b[1] + a[2] * b[2] + a[3] * b[3] end
+      frame_ok = frame_ok and c.k1[v] >= c.k2[v]
+        and c.kappa[v] == math.max(math.abs(c.k1[v]), math.abs(c.k2[v]))
+        and math.abs(dot(d1, d1) - 1) < 1e-12 and math.abs(dot(d2, d2) - 1) < 1e-12
+        and math.abs(dot(d1, d2)) < 1e-12 and math.abs(dot(d1, p)) < 0.05 * R
+        and math.abs(dot(d2, p)) < 0.05 * R
+    end
+    T.check(worst <= 0.05, string.format("%s: k1, k2 within 5%% of 1/R (worst %.4f)", what, worst))
+    T.check(frame_ok, what .. ": k1 >= k2, kappa = max |k|, unit tangent perpendicular directions")
+  end
+  -- A plane does not bend; an empty options table is the default.
+  local flat = femlod.mesh { positions = { 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0 }, triangles = { 1, 2, 3, 1, 3, 4 } }
+  local fc = flat:curvature {}
+  T.eq(fc.kappa[1] + fc.kappa[2] + fc.kappa[3] + fc.kappa[4], 0, "a plane is flat")
+  -- Errors name the recipe line.
+  local env = { m = sphere }
+  T.errmsg("code:1: curvature: radius must be a finite number >= 0 (got -1)",
+    "m:curvature { radius = -1 }", env)
+  T.errmsg("code:1: curvature: radius must be a finite number >= 0 (got nan)",
+    "m:curvature { radius = 0/0 }", env)
+  T.errmsg("code:1: curvature: radius must be a finite number >= 0 (got inf)",
+    "m:curvature { radius = math.huge }", env)
+  T.errmsg("code:1: bad argument #1 to 'curvature' (unknown key 'raduis'; valid keys: radius)",
+    "m:curvature { raduis = 1 }", env)
+  T.errmsg("code:1: bad argument #1 to 'curvature' (radius: number expected, got string)",
+    "m:curvature { radius = 'big' }", env)
+  T.errmsg("code:1: bad argument #1 to 'curvature' (table expected, got number)",
+    "m:curvature(1)", env)
+  T.errmsg("code:2: bad argument #1 to 'curvature' (femlod.Mesh expected, got table)",
+    "local t = {}\nm.curvature(t)", env)
+end
+-- }======
+
 -- {====== life cycle: close, <close>, __gc
 do
   local kept

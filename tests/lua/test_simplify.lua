@@ -213,7 +213,8 @@ do
   T.eq(A:input_vertices(), 6475, "h:input_vertices()")
   T.eq(math.type(A:log_bytes()), "integer", "h:log_bytes() is an integer")
   T.check(A:log_bytes() > 16 * s.collapses, "the log holds every collapse: " .. A:log_bytes())
-  T.eq(tostring(A), string.format("femlod.Hierarchy (%d collapses, 3000 triangles)", s.collapses), "tostring")
+  T.eq(tostring(A), string.format("femlod.Hierarchy (%d nodes, 3000 triangles on the front)", 6475 + s.collapses),
+    "tostring")
   T.eq(getmetatable(A).__name, "femlod.Hierarchy", "metatable name")
   -- Each call gives a new table and a new mesh.
   T.check(A:stats() ~= A:stats(), "stats() makes a new table")
@@ -258,7 +259,11 @@ do
     string.format("an off min_stretch refuses far less: %d vs %d", h2:stats().rejected.stretch,
       A:stats().rejected.stretch))
   T.eq(h2:stats().violating_input, 0, "nothing violates an off threshold")
-  T.eq(fandisk:simplify({}):stats().thresholds.target, false, "no target: thresholds.target is false")
+  local none = fandisk:simplify {}
+  T.eq(none:stats().thresholds.target, false, "no target: thresholds.target is false")
+  T.check(report.stats(none):find("\nthresholds: target none, tolerance "), "report.stats: target none")
+  T.check(report.stats(h):find(", max_valence off, feature_angle 40, feature_weight off, max_normal_change off$"),
+    "report.stats: off thresholds: " .. report.stats(h))
 end
 -- }======
 
@@ -310,6 +315,12 @@ T.errmsg("code:1: bad argument #2 to 'simplify' (table expected, got number)", "
 T.errmsg("code:1: bad argument #1 to 'simplify' (femlod.Mesh expected, got nil)", "femlod.simplify(nil)", env)
 T.errmsg("code:1: bad argument #1 to 'simplify' (femlod.Mesh expected, got femlod.Hierarchy)",
   "femlod.simplify(h)", { femlod = femlod, h = A })
+T.errmsg("code:1: bad argument #1 to 'stats' (stats table or femlod.Hierarchy expected, got number)",
+  "local s = report.stats(5)", { report = report })
+T.errmsg("code:1: bad argument #1 to 'stats' (stats table or femlod.Hierarchy expected, got table without stats fields)",
+  "local s = report.stats({})", { report = report })
+T.errmsg("code:1: bad argument #1 to 'stats' (stats table or femlod.Hierarchy expected, got femlod.Mesh)",
+  "local s = report.stats(m)", { report = report, m = fandisk })
 -- A raising lock function: its own error, at its own line, comes through.
 T.errmsg("code:2: no lock for vertex 1", "local f = function(x, y, z, i)\n  error('no lock for vertex ' .. i)\nend\n"
   .. "return m:simplify { lock = f }", env)

@@ -1,0 +1,183 @@
+/*
+ * lod.c - adaptive LOD on the vertex hierarchy (paper section 5.3).
+ *
+ * Global LOD with density preservation (5.3.2, with method-notes.md's
+ * rules): S_REF is fixed when the call starts (front nodes: their e_size;
+ * nodes below the front: their front ancestor's; nodes above: the mean of
+ * their children's, bottom-up), r = e_size / S_REF, and the count moves by
+ * collapsing the pair whose parent has the smallest r or splitting the
+ * front node with the largest r.
+ */
+#include "heap.h"
+#include "hierarchy.h"
+
+#include <math.h>
+#include <stdlib.h>
+
+/* r of every node for the current front. */
+static double *density_ratios(const femlod_hierarchy *h) {
+    double *sref = fl_alloc(h->nn, sizeof(double));
+    if (!sref) return NULL;
+    for (size_t x = 0; x < h->nn; x++)
+        if (h->state[x] == FRONT) sref[x] = h->e_size[x];
+    /* parents have larger ids than children: downwards for the nodes below
+     * the front, upwards for the ones above it */
+    for (size_t x = h->nn; x-- > 0;)
+        if (h->state[x] == BELOW) sref[x] = sref[h->parent[x]];
+    for (size_t x = h->nv; x < h->nn; x++)
+        if (h->state[x] == ABOVE) {
+            size_t c = x - h->nv;
+            sref[x] = 0.5 * (sref[h->child[2 * c]] + sref[h->child[2 * c + 1]]);
+        }
+    for (size_t x = 0; x < h->nn; x++)
+        sref[x] = sref[x] > 0 ? h->e_size[x] / sref[x] : 1.0; /* now r */
+    return sref;
+}
+
+/* Tie-break order of the nodes, in [0, 1). Ties are the rule, not the
+ * exception: every node of the starting front has r = 1, and a rescale by
+ * 1.5 must split half of them. Node ids follow the collapse order, which
+ * sweeps the part region by region, so taking ties by id would refine one
+ * region before another. Instead the nodes are ordered by the bit-reversed
+ * Morton code of their position (a van der Corput sequence over space):
+ * every prefix of that order is spread evenly over the part, so whatever
+ * fraction of the ties is taken, each region gets its share. Exact repeats
+ * (same cell) fall back to a scramble of the id; results repeat exactly. */
+static double *tie_order(const femlod_hierarchy *h) {
+    double *u = fl_alloc(h->nn, sizeof(double)), lo[3], hi[3];
+    if (!u) return NULL;
+    for (int k = 0; k < 3; k++) lo[k] = hi[k] = h->nn ? h->pos[k] : 0.0;
+    for (size_t x = 0; x < h->nn; x++)
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], h->pos[3 * x + (size_t)k]);
+            hi[k] = fmax(hi[k], h->pos[3 * x + (size_t)k]);
+        }
+    for (size_t x = 0; x < h->nn; x++) {
+        uint32_t q[3], code = 0, rev = 0;
+        for (int k = 0; k < 3; k++) {
+            double t = hi[k] > lo[k] ? (h->pos[3 * x + (size_t)k] - lo[k]) / (hi[k] - lo[k]) : 0;
+            q[k] = (uint32_t)fmin(1023.0, fmax(0.0, t * 1024.0));
+        }
+        for (int b = 0; b < 10; b++)
+            for (int k = 0; k < 3; k++) code |= ((q[k] >> b) & 1u) << (3 * b + k);
+        for (int b = 0; b < 30; b++) rev |= ((code >> b) & 1u) << (29 - b);
+        uint32_t s = (uint32_t)x * 0x9E3779B1u;
+        s ^= s >> 15;
+        s *= 0x85EBCA77u;
+        s ^= s >> 13;
+        u[x] = ((double)rev + (double)s / 4294967296.0) / 1073741824.0;
+    }
+    return u;
+}
+
+/* Heap key: r, ties taken in tie order; the perturbation (below 1e-9
+ * relative) does not reorder values that differ by more. */
+static double key_of(double r, double u) { return r * (1.0 + 1e-9 * (1.0 - u)); }
+
+/* A collapse whose vstars are all at or below the front needs no other
+ * collapse first. */
+static int free_collapse(const femlod_hierarchy *h, uint32_t k) {
+    size_t c = k - h->nv;
+    for (uint32_t v = h->vstar_start[c]; v < h->vstar_start[c + 1]; v++)
+        if (h->state[h->vstars[v]] == ABOVE) return 0;
+    return 1;
+}
+
+/* A split that no applied node depends on needs no other split first. */
+static int free_split(const femlod_hierarchy *h, uint32_t x) {
+    for (uint32_t d = h->dep_start[x]; d < h->dep_start[x + 1]; d++)
+        if (h->state[h->deps[d]] != ABOVE) return 0;
+    return 1;
+}
+
+/* Candidates of each direction. */
+static int can_collapse(const femlod_hierarchy *h, uint32_t k) {
+    if (k == NONE || h->state[k] != ABOVE) return 0;
+    size_t c = k - h->nv;
+    return h->state[h->child[2 * c]] == FRONT && h->state[h->child[2 * c + 1]] == FRONT;
+}
+
+static int can_split(const femlod_hierarchy *h, uint32_t x) {
+    return x != NONE && x >= h->nv && h->state[x] == FRONT;
+}
+
+/* One direction of the rescale. Candidates come from the heap, best first;
+ * one that needs other operations first waits until no free one is left, so
+ * that a cascade of dependencies cannot carry the count far past the target
+ * (it would change regions that the density order did not choose). */
+static size_t run(femlod_hierarchy *h, fl_heap *heap, const double *r, const double *u,
+                  uint32_t *waiting,
+                  size_t target, int down) {
+    size_t done = 0, nwait = 0;
+    int forced = 0;
+    double sign = down ? -1.0 : 1.0; /* down: smallest r first */
+    for (size_t p = 0; p < h->front_n; p++) {
+        uint32_t x = down ? h->parent[h->front[p]] : h->front[p];
+        if (down ? can_collapse(h, x) : can_split(h, x)) fl_heap_set(heap, x, sign * key_of(r[x], u[x]));
+    }
+    while (down ? h->active_n > target : h->active_n < target) {
+        if (fl_heap_size(heap) == 0) {
+            if (forced || nwait == 0) break;
+            forced = 1; /* only dependent operations are left: allow them */
+            for (size_t w = 0; w < nwait; w++) {
+                uint32_t q = waiting[w];
+                if (down ? can_collapse(h, q) : can_split(h, q))
+                    fl_heap_set(heap, q, sign * key_of(r[q], u[q]));
+            }
+            nwait = 0;
+            continue;
+        }
+        uint32_t x = fl_heap_pop(heap, NULL);
+        if (!(down ? can_collapse(h, x) : can_split(h, x))) continue;
+        if (!forced && !(down ? free_collapse(h, x) : free_split(h, x))) {
+            waiting[nwait++] = x;
+            continue;
+        }
+        done += down ? fl_hierarchy_force_collapse(h, x) : fl_hierarchy_force_split(h, x);
+        /* new candidates: the parent of a collapse, the children of a split */
+        while (h->work_n > 0) {
+            uint32_t q = h->work[--h->work_n];
+            if (down ? can_collapse(h, q) : can_split(h, q))
+                fl_heap_set(heap, q, sign * key_of(r[q], u[q]));
+        }
+        /* the operation may have freed waiting ones */
+        size_t keep = 0;
+        for (size_t w = 0; w < nwait; w++) {
+            uint32_t q = waiting[w];
+            if (!(down ? can_collapse(h, q) : can_split(h, q))) continue;
+            if (down ? free_collapse(h, q) : free_split(h, q))
+                fl_heap_set(heap, q, sign * key_of(r[q], u[q]));
+            else
+                waiting[keep++] = q;
+        }
+        nwait = keep;
+    }
+    return done;
+}
+
+femlod_status femlod_hierarchy_rescale(femlod_hierarchy *h, size_t target, size_t *ops,
+                                       femlod_error *err) {
+    if (ops) *ops = 0;
+    double *r = density_ratios(h), *u = tie_order(h);
+    uint32_t *waiting = fl_alloc(h->nn, sizeof(uint32_t));
+    fl_heap heap;
+    int heap_ok = r && u && waiting && fl_heap_init(&heap, h->nn);
+    if (!heap_ok) {
+        free(r);
+        free(u);
+        free(waiting);
+        return fl_error(err, FEMLOD_ENOMEM, "out of memory in rescale of %zu nodes", h->nn);
+    }
+    size_t done = 0;
+    h->collect = 1;
+    h->work_n = 0;
+    if (h->active_n != target) done = run(h, &heap, r, u, waiting, target, h->active_n > target);
+    h->collect = 0;
+    h->work_n = 0;
+    fl_heap_free(&heap);
+    free(waiting);
+    free(u);
+    free(r);
+    if (ops) *ops = done;
+    return FEMLOD_OK;
+}

@@ -1,0 +1,142 @@
+/* simplify_digest.c - a digest of femlod_simplify's outputs (mesh and
+ * collapse log) over a fixed set of inputs and options, for checking that a
+ * speed change leaves every result byte-identical: run it before and after
+ * and compare the lines (docs/simplify.md "Benchmark").
+ *
+ * Usage: simplify_digest [data-folder [case-substring]]
+ * Each line: case name, output triangles, collapses, a 64-bit FNV-1a hash of
+ * the output positions and triangles, one of the collapse log, and the
+ * seconds (the only field that may differ between two runs). */
+#include "femlod.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#ifndef FEMLOD_SHARED_DATA
+#define FEMLOD_SHARED_DATA "../shared/data"
+#endif
+
+static uint64_t fnv(uint64_t h, const void *p, size_t n) {
+    const unsigned char *c = p;
+    for (size_t i = 0; i < n; i++) {
+        h ^= c[i];
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+static double now(void) {
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+typedef struct scase {
+    const char *name, *file;
+    unsigned levels;
+    size_t target;
+    double tol, st, sz, dev, nc;
+    int val, keep_boundary, area, lock;
+    double fangle, fweight;
+} scase;
+
+static int lock_half(void *payload, double x, double y, double z) {
+    (void)payload;
+    (void)y;
+    (void)z;
+    return x > 40.0 && x < 45.0;
+}
+
+int main(int argc, char **argv) {
+    const char *dir = argc > 1 ? argv[1] : FEMLOD_SHARED_DATA;
+    const char *only = argc > 2 ? argv[2] : NULL;
+    static const scase cases[] = {
+        {"cover-paper-12k", "cover.obj", 0, 12000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0},
+        {"cover-paper-6k", "cover.obj", 0, 6000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0},
+        {"cover-default-all", "cover.obj", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
+        {"cover-dev-lock", "cover.obj", 0, 3000, 0, 0.3, 0, 0.05, 0, 10, 0, 0, 1, 0, 0},
+        {"cover-nocone-area", "cover.obj", 0, 5000, 0, 0, 0, 0, -1, -1, 0, 1, 0, 0, 0},
+        {"cover-notol", "cover.obj", 0, 2000, -1, -1, -1, 0, 30, 0, 0, 0, 0, 0, 0},
+        {"fandisk-2k", "fandisk.obj", 0, 2000, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
+        {"fandisk-strict", "fandisk.obj", 0, 1000, 0, 0.4, 0, 0.01, 20, 8, 0, 0, 0, 0, 0},
+        {"fandisk-paper", "fandisk.obj", 0, 3000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0},
+        {"bunny-3k", "bunny.obj", 0, 3000, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
+        {"sphere-hole", "sphereWithHole.stl", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
+        {"sphere-hole-keep", "sphereWithHole.stl", 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0},
+        {"spider", "spider_binary.stl", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
+        {"cover-nofeat", "cover.obj", 0, 4000, 0, 0, 0, 0, 0, 0, 0, 0, 0, -1, -1},
+        {"fandisk-dev-nocone", "fandisk.obj", 0, 1500, 0, 0, 0, 0.02, -1, 0, 0, 0, 0, 60, 5},
+        {"engine", "2CylinderEngine.glb", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
+        {"cover1-paper-12k", "cover.obj", 1, 12000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0},
+    };
+    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+        const scase *k = cases + c;
+        if (only && !strstr(k->name, only)) continue;
+        char path[1024];
+        snprintf(path, sizeof path, "%s/%s", dir, k->file);
+        femlod_error err;
+        femlod_mesh *m0 = NULL, *m = NULL;
+        if (femlod_mesh_read(&m0, path, NULL, &err) != FEMLOD_OK) {
+            printf("%-20s cannot read: %s\n", k->name, err.message);
+            continue;
+        }
+        if (k->levels) {
+            if (femlod_mesh_subdivide(&m, m0, k->levels, &err) != FEMLOD_OK) return 1;
+            femlod_mesh_free(m0);
+        } else {
+            m = m0;
+        }
+        femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+        o.target = k->target;
+        o.tolerance = k->tol;
+        o.min_stretch = k->st;
+        o.max_size = k->sz;
+        o.max_deviation = k->dev;
+        o.max_normal_change = k->nc;
+        o.max_valence = k->val;
+        o.keep_boundary = k->keep_boundary;
+        o.area_weighted = k->area;
+        if (k->lock) o.lock_fn = lock_half;
+        o.feature_angle = k->fangle;
+        o.feature_weight = k->fweight;
+        femlod_mesh *out = NULL;
+        femlod_collapse_log *log = NULL;
+        femlod_simplify_result res;
+        double t0 = now();
+        if (femlod_simplify(&out, &log, m, &o, &res, &err) != FEMLOD_OK) {
+            printf("%-20s error: %s\n", k->name, err.message);
+            femlod_mesh_free(m);
+            continue;
+        }
+        double t = now() - t0;
+        size_t nv = femlod_mesh_vertex_count(out), nt = femlod_mesh_triangle_count(out);
+        uint64_t hm = 1469598103934665603ull, hl = hm;
+        hm = fnv(hm, femlod_mesh_positions(out), 3 * nv * sizeof(double));
+        hm = fnv(hm, femlod_mesh_triangles(out), 3 * nt * sizeof(uint32_t));
+        size_t nc = femlod_collapse_log_count(log);
+        for (size_t x = 0; x < nc; x++) {
+            femlod_collapse cl;
+            femlod_collapse_log_get(log, x, &cl);
+            hl = fnv(hl, &cl.i, sizeof cl.i);
+            hl = fnv(hl, &cl.j, sizeof cl.j);
+            hl = fnv(hl, &cl.k, sizeof cl.k);
+            hl = fnv(hl, cl.position, sizeof cl.position);
+            hl = fnv(hl, &cl.e_size, sizeof cl.e_size);
+            hl = fnv(hl, cl.vstars, cl.vstar_count * sizeof *cl.vstars);
+            hl = fnv(hl, cl.faces, 3 * cl.face_count);
+        }
+        size_t nout = 0;
+        const uint32_t *on = femlod_collapse_log_output_nodes(log, &nout);
+        hl = fnv(hl, on, nout * sizeof *on);
+        printf("%-20s %7zu tris %7zu collapses (pre %zu) %s  mesh %016llx  log %016llx  %7.3f s\n", k->name, nt,
+               res.collapses, res.prephase_collapses, femlod_stop_reason_name(res.stop_reason),
+               (unsigned long long)hm, (unsigned long long)hl, t);
+        fflush(stdout);
+        femlod_collapse_log_free(log);
+        femlod_mesh_free(out);
+        femlod_mesh_free(m);
+    }
+    return 0;
+}

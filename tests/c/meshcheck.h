@@ -1,0 +1,13 @@
+/* meshcheck.h - whole-mesh checks for tests: self-intersecting triangle
+ * pairs. Brute force over a uniform grid of triangle boxes; the pair test is
+ * src/intersect.c's (shared corners and edges are not intersections). */
+#ifndef FEMLOD_MESHCHECK_H
+#define FEMLOD_MESHCHECK_H
+
+#include "femlod.h"
+
+/* Pairs of triangles that meet other than in shared corners or a shared
+ * edge; eps is the plane tolerance of fl_tri_tri_intersect. */
+size_t meshcheck_self_intersections(const femlod_mesh *m, double eps);
+
+#endif
