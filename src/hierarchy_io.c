@@ -15,7 +15,7 @@
  *                 | u32 face count ; then u32 vstars [nvstars] ; u8 face refs [3 nlogfaces]
  *   u32 front nodes [nfront]
  *   result block (when flag 0): u32 field count, then the fields of
- *                 femlod_simplify_result as u64 / f64
+ *                 femlod_simplify_result as u64 / f64 (seconds stored as 0)
  *   u32 CRC-32 (zlib) of every byte before it
  */
 #include "hierarchy.h"
@@ -29,7 +29,7 @@
 static const unsigned char MAGIC[8] = {0x89, 'F', 'L', 'H', '\r', '\n', 0x1a, '\n'};
 #define FLH_VERSION 1u
 #define FLH_HAS_RESULT 1u
-#define RESULT_FIELDS (15u + FEMLOD_REJECT_COUNT)
+#define RESULT_FIELDS (17u + FEMLOD_REJECT_COUNT)
 
 /* {====== writing: a stream that keeps the CRC */
 
@@ -169,7 +169,8 @@ femlod_status femlod_hierarchy_save(const femlod_hierarchy *h, const char *path,
         w_u64(w, r->dropped_degenerate);
         w_u64(w, r->target);
         w_u64(w, (uint64_t)(int64_t)r->max_valence);
-        w_f64(w, r->seconds);
+        /* the wall time is not stored: the same hierarchy gives the same bytes */
+        w_f64(w, 0.0);
         w_f64(w, r->tolerance);
         w_f64(w, r->max_deviation);
         w_f64(w, r->min_stretch);
@@ -282,7 +283,7 @@ femlod_status femlod_hierarchy_load(femlod_hierarchy **out, const char *path,
     }
     size_t nv = r_count(&r, 24, "vertex");
     size_t nf = r_count(&r, 12, "face");
-    size_t nc = r_count(&r, 44, "collapse");
+    size_t nc = r_count(&r, 48, "collapse");
     size_t nvs = r_count(&r, 4, "vstar");
     size_t nlog = r_count(&r, 3, "collapse face");
     size_t nfront = r_count(&r, 4, "front node");
@@ -312,7 +313,7 @@ femlod_status femlod_hierarchy_load(femlod_hierarchy **out, const char *path,
     meta = fl_alloc(nc, 4 * sizeof(uint32_t));
     cpos = fl_alloc(nc, 4 * sizeof(double));
     if (!meta || !cpos) goto nomem;
-    if (!need(&r, 44 * nc, "the collapses")) goto parse_error;
+    if (!need(&r, 48 * nc, "the collapses")) goto parse_error;
     size_t sum_vs = 0, sum_faces = 0;
     for (size_t c = 0; c < nc; c++) {
         for (int d = 0; d < 2; d++) meta[4 * c + (size_t)d] = r_u32(&r);

@@ -72,7 +72,7 @@
 #define FEMLOD_SIMPLIFY_LINE_TURN 20.0 /* degrees: a feature line this straight takes midpoints */
 #endif
 #ifndef FEMLOD_SIMPLIFY_BOUND
-#define FEMLOD_SIMPLIFY_BOUND 1 /* exact lazy re-evaluation with upper bounds (0: eager) */
+#define FEMLOD_SIMPLIFY_BOUND 0 /* 1: exact lazy re-evaluation with upper bounds (docs/simplify.md: fewer evaluations, more time) */
 #endif
 #ifndef FEMLOD_SIMPLIFY_USE_OPTIMUM
 #define FEMLOD_SIMPLIFY_USE_OPTIMUM 1
