@@ -10,16 +10,18 @@
  *                               quadrics on feature edges weighted by
  *                               sharpness) and quadric.h (Garland and
  *                               Heckbert, SIGGRAPH 1997, plus line terms)
- *   4.1 2)-3) size, stretch     eval_candidate (squared forms: no sqrt to
+ *   4.1 2)-3) size, stretch     tri_eval (squared forms: no sqrt to
  *                               compare), tri_stretch
- *   4.2.1 candidates            evaluate (midpoint and the robust optimum,
- *                               fl_quadric_optimum2; the fixed endpoint for
- *                               corners, locks and feature lines) and
- *                               evaluate_line (collapses along a feature line)
- *   4.2.2 validity              gather (C4 valence, link condition, features,
- *                               locks), eval_candidate (C1 tolerance, C2
- *                               stretch, C3 size, turn against the current
- *                               mesh), expensive_checks at pop time:
+ *   4.2.1 candidates            make_candidates (midpoint and the robust
+ *                               optimum, fl_quadric_optimum2, cached per
+ *                               edge; the fixed endpoint for corners, locks
+ *                               and feature lines; endpoints and midpoint
+ *                               along a feature line), evaluate
+ *   4.2.2 validity              gather (C4 valence, features, locks),
+ *                               eval_candidate and tri_eval (C1 tolerance,
+ *                               C2 stretch, C3 size, turn against the
+ *                               current mesh), at pop time link_check and
+ *                               expensive_checks:
  *                               cone_check (turn against the input surface,
  *                               PMP's normal cones), deviation_check
  *                               (max_deviation, PMP's Hausdorff tracking),
@@ -27,11 +29,12 @@
  *   4.2.2 pre-phase             simplify_run, phase 0
  *   4.2.3 priority              rho = Sz_DIF * St_MIN * St_AVE, eval_candidate;
  *                               the queue: run_queue, reevaluate_ring, heap.c
+ *                               (optionally exact lazy: bound_edge, settle)
  *   4.2 step 4, 5.1 log         collapse, log_collapse, simplify_log.c
  *
  * Topology (link condition, Dey et al., "Topology preserving edge
  * contraction", 1999; the tetrahedron and handle cases as in OpenMesh's
- * is_collapse_ok) is checked in gather.
+ * is_collapse_ok) is checked in gather and link_check.
  *
  * Structure: vertices keep their incident faces in one growing reference
  * array (a new vertex's list is appended; the merged vertex takes the slot
@@ -721,7 +724,7 @@ static double evaluate(simp *S, ring *R, uint32_t e) {
     for (int c = 0; c < R->ncand; c++) {
         uint32_t h;
         w = eval_candidate(S, R, R->cand[c], &R->rho[c], &h);
-        if (c < 2) S->ehint[2 * (size_t)e + c] = h;
+        if (FEMLOD_SIMPLIFY_BOUND && c < 2) S->ehint[2 * (size_t)e + c] = h;
         R->ok[c] = w == NO_REASON;
         alltol &= w == FEMLOD_REJECT_TOLERANCE;
         if (R->ok[c] && R->rho[c] > best) { /* ties keep the earlier */
@@ -1721,10 +1724,10 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     if (ev2) S->ev = ev2;
     uint16_t *enf2 = fl_realloc(S->enf, ne + 1, sizeof *enf2);
     if (enf2) S->enf = enf2;
-    if (!CALLOC(S->eflag, ne + 1) || !CALLOC(S->emark, ne + 1) || !ALLOC(S->ehint, 2 * ne + 2) ||
-        !ALLOC(S->eopt, 3 * ne + 3))
+    if (!CALLOC(S->eflag, ne + 1) || !CALLOC(S->emark, ne + 1) || !ALLOC(S->eopt, 3 * ne + 3) ||
+        (FEMLOD_SIMPLIFY_BOUND && !ALLOC(S->ehint, 2 * ne + 2)))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
-    memset(S->ehint, 0xff, (2 * ne + 2) * sizeof *S->ehint);
+    if (FEMLOD_SIMPLIFY_BOUND) memset(S->ehint, 0xff, (2 * ne + 2) * sizeof *S->ehint);
 
     double lo[3], hi[3];
     femlod_mesh_bbox(mesh, lo, hi);

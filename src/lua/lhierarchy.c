@@ -728,6 +728,40 @@ static int hierarchy_coarsen(lua_State *L) {
     return refine_or_coarsen(L, femlod_hierarchy_coarsen);
 }
 
+/* h:rescale{ target = N } or h:rescale{ factor = f }: global LOD with the
+ * density of the current front kept (paper 5.3.2, femlod_hierarchy_rescale);
+ * factor multiplies the front's triangle count. Returns the operations done. */
+static int hierarchy_rescale(lua_State *L) {
+    static const char *const keys[] = {"factor", "target", NULL};
+    fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    luaL_checktype(L, 2, LUA_TTABLE);
+    fl_opts o;
+    fl_opts_open(&o, L, 2, keys);
+    no_more_arguments(L, 3);
+    int has_target = fl_opts_push(&o, "target") != LUA_TNIL;
+    int has_factor = fl_opts_push(&o, "factor") != LUA_TNIL;
+    lua_pop(L, has_target + has_factor);
+    if (has_target == has_factor) return luaL_argerror(L, 2, "give exactly one of target and factor");
+    lua_Integer target = 0;
+    if (has_target) {
+        target = fl_opts_integer(&o, "target", 0);
+        if (target < 1 || (lua_Unsigned)target > UINT32_MAX)
+            return fl_opts_error(&o, "target", "must be an integer in 1..4294967295");
+    } else {
+        lua_Number factor = fl_opts_number(&o, "factor", 0.0);
+        if (!(factor > 0.0) || !(factor < HUGE_VAL))
+            return fl_opts_error(&o, "factor", "must be a positive finite number");
+        double t = floor(factor * (double)femlod_hierarchy_front_triangles(h->hier) + 0.5);
+        target = t < 1.0 ? 1 : t > 4294967295.0 ? (lua_Integer)4294967295.0 : (lua_Integer)t;
+    }
+    size_t ops = 0;
+    femlod_error err;
+    if (femlod_hierarchy_rescale(h->hier, (size_t)target, &ops, &err) != FEMLOD_OK)
+        return fl_lua_raise(L, &err);
+    lua_pushinteger(L, (lua_Integer)ops);
+    return 1;
+}
+
 /* }====== */
 
 static int hierarchy_node(lua_State *L) {
@@ -860,6 +894,7 @@ static const luaL_Reg hierarchy_methods[] = {
     {"front", hierarchy_front},
     {"refine", hierarchy_refine},
     {"coarsen", hierarchy_coarsen},
+    {"rescale", hierarchy_rescale},
     {"split", hierarchy_split},
     {"collapse", hierarchy_collapse},
     {"counts", hierarchy_counts},

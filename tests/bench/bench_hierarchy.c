@@ -4,6 +4,7 @@
  * time, and a local change of about 10% of the front against the
  * simplification's time. Medians of several runs; no assertion on time.
  * Usage: bench_hierarchy [DATA_DIR] */
+#include "bench_util.h"
 #include "femlod.h"
 
 #include <math.h>
@@ -12,21 +13,6 @@
 #include <sys/resource.h>
 #include <time.h>
 
-static double now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *t, int n) {
-    qsort(t, (size_t)n, sizeof t[0], cmp_double);
-    return t[n / 2];
-}
 
 static void die(const femlod_error *err) {
     fprintf(stderr, "bench_hierarchy: %s\n", err->message);
@@ -60,9 +46,9 @@ int main(int argc, char **argv) {
     femlod_collapse_log *log = NULL;
     femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
     o.target = 12000;
-    double t0 = now();
+    double t0 = bench_now();
     if (femlod_simplify(&out, &log, dense, &o, NULL, &err) != FEMLOD_OK) die(&err);
-    double t_simplify = now() - t0;
+    double t_simplify = bench_now() - t0;
     printf("input %zu triangles; simplify to %zu: %.2f s\n", nt, femlod_mesh_triangle_count(out),
            t_simplify);
 
@@ -78,34 +64,34 @@ int main(int argc, char **argv) {
     for (int r = 0; r < RUNS; r++) {
         femlod_hierarchy *h = NULL;
         femlod_mesh *m = NULL;
-        t0 = now();
+        t0 = bench_now();
         if (femlod_hierarchy_create(&h, dense, log, &err) != FEMLOD_OK) die(&err);
-        t_build[r] = now() - t0;
+        t_build[r] = bench_now() - t0;
         bytes = femlod_hierarchy_bytes(h);
         front_coarse = femlod_hierarchy_front_triangles(h);
-        t0 = now();
+        t0 = bench_now();
         if (femlod_hierarchy_refine(h, 0.0, NULL, NULL, &n_split, &err) != FEMLOD_OK) die(&err);
-        t_split[r] = now() - t0;
-        t0 = now();
+        t_split[r] = bench_now() - t0;
+        t0 = bench_now();
         if (femlod_hierarchy_coarsen(h, INFINITY, NULL, NULL, &n_coll, &err) != FEMLOD_OK) die(&err);
-        t_coll[r] = now() - t0;
-        t0 = now();
+        t_coll[r] = bench_now() - t0;
+        t0 = bench_now();
         if (femlod_hierarchy_refine(h, 0.0, ball_size, &b, &n_local, &err) != FEMLOD_OK) die(&err);
-        t_local[r] = now() - t0;
+        t_local[r] = bench_now() - t0;
         front_local = femlod_hierarchy_front_triangles(h);
-        t0 = now();
+        t0 = bench_now();
         if (femlod_hierarchy_extract(h, &m, NULL, &err) != FEMLOD_OK) die(&err);
-        t_ext[r] = now() - t0;
+        t_ext[r] = bench_now() - t0;
         femlod_mesh_free(m);
-        t0 = now();
+        t0 = bench_now();
         size_t back = 0;
         if (femlod_hierarchy_coarsen(h, INFINITY, NULL, NULL, &back, &err) != FEMLOD_OK) die(&err);
-        t_back[r] = now() - t0;
+        t_back[r] = bench_now() - t0;
         femlod_hierarchy_free(h);
     }
-    double ts = median(t_split, RUNS), tc = median(t_coll, RUNS), tl = median(t_local, RUNS);
+    double ts = bench_median(t_split, RUNS), tc = bench_median(t_coll, RUNS), tl = bench_median(t_local, RUNS);
     printf("hierarchy: %zu bytes (%.0f per input vertex), build %.3f s\n", bytes,
-           (double)bytes / (double)femlod_mesh_vertex_count(dense), median(t_build, RUNS));
+           (double)bytes / (double)femlod_mesh_vertex_count(dense), bench_median(t_build, RUNS));
     printf("split everything:    %zu splits in %.3f s = %.2f M splits/s\n", n_split, ts,
            (double)n_split / ts * 1e-6);
     printf("collapse everything: %zu collapses in %.3f s = %.2f M collapses/s\n", n_coll, tc,
@@ -113,7 +99,7 @@ int main(int argc, char **argv) {
     printf("local refine (ball, %zu -> %zu triangles, %zu splits): %.4f s = %.2f%% of simplify\n",
            front_coarse, front_local, n_local, tl, 100.0 * tl / t_simplify);
     printf("extract the front (%zu triangles): %.4f s; coarsen back: %.4f s\n", front_local,
-           median(t_ext, RUNS), median(t_back, RUNS));
+           bench_median(t_ext, RUNS), bench_median(t_back, RUNS));
     struct rusage ru;
     getrusage(RUSAGE_SELF, &ru);
     printf("peak resident memory: %.1f MiB\n", (double)ru.ru_maxrss / 1024.0);

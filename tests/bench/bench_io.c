@@ -2,6 +2,7 @@
  * subdivided twice, written by femlod) and the OBJ meshes of examples/data.
  * Prints the median of several runs; never asserts a time (see docs/testing.md).
  * Usage: bench_io [DATA_DIR] [TMP_DIR] */
+#include "bench_util.h"
 #include "femlod.h"
 
 #include <stdio.h>
@@ -9,16 +10,6 @@
 #include <sys/resource.h>
 #include <time.h>
 
-static double now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b) {
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 /* Median seconds of `runs` loads of path; prints the counts once. */
 static double time_load(const char *path, int runs) {
@@ -27,19 +18,18 @@ static double time_load(const char *path, int runs) {
     for (int r = 0; r < runs; r++) {
         femlod_mesh *m = NULL;
         femlod_error err;
-        double t0 = now();
+        double t0 = bench_now();
         if (femlod_mesh_read(&m, path, NULL, &err) != FEMLOD_OK) {
             fprintf(stderr, "bench_io: %s\n", err.message);
             exit(1);
         }
-        t[r] = now() - t0;
+        t[r] = bench_now() - t0;
         if (r == 0)
             printf("  %s: %zu triangles, %zu vertices\n", path, femlod_mesh_triangle_count(m),
                    femlod_mesh_vertex_count(m));
         femlod_mesh_free(m);
     }
-    qsort(t, (size_t)runs, sizeof t[0], cmp_double);
-    return t[runs / 2];
+    return bench_median(t, runs);
 }
 
 int main(int argc, char **argv) {

@@ -4,6 +4,7 @@
 #include <assert.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 static femlod_mesh *make(const double *p, size_t nv, const uint32_t *t, size_t nt) {
     femlod_mesh *m = NULL;
@@ -110,4 +111,10 @@ femlod_mesh *shape_bowtie(void) {
     static const double p[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, -1, 0, 0, -1, -1, 0};
     static const uint32_t t[] = {0, 1, 2, 0, 3, 4};
     return make(p, 5, t, 2);
+}
+
+int shape_same_mesh(const femlod_mesh *a, const femlod_mesh *b) {
+    if (!a || !b || a->nv != b->nv || a->nt != b->nt) return 0;
+    return memcmp(a->pos, b->pos, a->nv * 3 * sizeof(double)) == 0 &&
+           memcmp(a->tri, b->tri, a->nt * 3 * sizeof(uint32_t)) == 0;
 }

@@ -18,4 +18,7 @@ femlod_mesh *shape_nonmanifold_fan(void);
 /* Two triangles touching at one vertex (a bow tie): a non-manifold vertex. */
 femlod_mesh *shape_bowtie(void);
 
+/* 1 when a and b hold identical arrays (bit for bit); 0 when either is NULL. */
+int shape_same_mesh(const femlod_mesh *a, const femlod_mesh *b);
+
 #endif

@@ -107,11 +107,6 @@ static int mesh_valid(const femlod_mesh *m) {
     return 1;
 }
 
-static int same_mesh(const femlod_mesh *a, const femlod_mesh *b) {
-    if (!a || !b || a->nv != b->nv || a->nt != b->nt) return 0;
-    return memcmp(a->pos, b->pos, a->nv * 3 * sizeof(double)) == 0 &&
-           memcmp(a->tri, b->tri, a->nt * 3 * sizeof(uint32_t)) == 0;
-}
 
 /* b's triangles are a's, corner by corner, with a's positions rounded to float32. */
 static int same_corners_f32(const femlod_mesh *a, const femlod_mesh *b) {
@@ -465,7 +460,7 @@ static void test_engine(void) {
     femlod_mesh *mm = NULL;
     femlod_error err = {0, ""};
     CHECK(femlod_mesh_read_memory(&mm, data, size, "engine", &ro, &err) == FEMLOD_OK);
-    CHECK(same_mesh(m, mm));
+    CHECK(shape_same_mesh(m, mm));
     femlod_mesh_free(mm);
     jfree(&root);
     free(data);
@@ -592,7 +587,7 @@ static void test_sparse_external(void) {
     femlod_mesh *mm = NULL;
     ro.format = FEMLOD_FORMAT_GLB;
     CHECK(femlod_mesh_read_memory(&mm, data, size, "mem.glb", &ro, &err) == FEMLOD_OK);
-    CHECK(same_mesh(m, mm));
+    CHECK(shape_same_mesh(m, mm));
     femlod_mesh_free(mm);
     femlod_mesh_free(m);
     free(data);
@@ -1058,7 +1053,7 @@ static void test_round_trips(void) {
         path_in(obj, sizeof obj, scratch, "rt.obj");
         femlod_mesh *again = NULL;
         if (back && write_ok(back, obj, NULL)) again = read_ok(obj);
-        CHECK(same_mesh(back, again));
+        CHECK(shape_same_mesh(back, again));
         femlod_mesh_free(again);
         femlod_mesh_free(back);
         unlink(p);

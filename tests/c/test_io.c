@@ -99,12 +99,6 @@ static void mem_bad(const char *text, femlod_format f, femlod_status st, const c
     CHECK_STR_HAS(err.message, want);
 }
 
-static int same_mesh(const femlod_mesh *a, const femlod_mesh *b) {
-    if (!a || !b) return 0;
-    if (a->nv != b->nv || a->nt != b->nt) return 0;
-    return memcmp(a->pos, b->pos, a->nv * 3 * sizeof(double)) == 0 &&
-           memcmp(a->tri, b->tri, a->nt * 3 * sizeof(uint32_t)) == 0;
-}
 
 /* Same triangles by corner positions (== so that -0.0 matches 0.0): what a
  * welded STL keeps. */
@@ -509,11 +503,11 @@ static void test_stl(void) {
     CHECK(tri_is(bin, 0, 0, 1, 2) && tri_is(bin, 3, 2, 1, 3));
     femlod_mesh *asc =
         read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "tetra_ascii.stl"), FEMLOD_FORMAT_AUTO);
-    CHECK(same_mesh(bin, asc));
+    CHECK(shape_same_mesh(bin, asc));
     /* BOM, CRLF, upper-case keywords, nan normals, two solids in one file. */
     femlod_mesh *two = read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "tetra_bom_two_solids.stl"),
                                FEMLOD_FORMAT_STL);
-    CHECK(same_mesh(bin, two));
+    CHECK(shape_same_mesh(bin, two));
     femlod_mesh_free(two);
     femlod_mesh_free(asc);
     femlod_mesh_free(bin);
@@ -613,7 +607,7 @@ static void test_ply(void) {
                               FEMLOD_FORMAT_PLY_ASCII); /* the file's own encoding wins */
     femlod_mesh *off =
         read_ok(path_in(p, sizeof p, FEMLOD_TEST_DATA, "tetra.off"), FEMLOD_FORMAT_OFF);
-    CHECK(same_mesh(le, off) && same_mesh(be, off));
+    CHECK(shape_same_mesh(le, off) && shape_same_mesh(be, off));
     femlod_mesh_free(le);
     femlod_mesh_free(be);
     femlod_mesh_free(off);
@@ -822,8 +816,8 @@ static void test_round_trips(void) {
         path_in(p, sizeof p, scratch, names[i]);
         if (!write_ok(a, p, exact[i])) continue;
         femlod_mesh *b = read_ok(p, FEMLOD_FORMAT_AUTO);
-        CHECK(same_mesh(a, b));
-        if (!same_mesh(a, b)) fprintf(stderr, "  round trip through %s differs\n", names[i]);
+        CHECK(shape_same_mesh(a, b));
+        if (!shape_same_mesh(a, b)) fprintf(stderr, "  round trip through %s differs\n", names[i]);
         femlod_mesh_free(b);
         unlink(p);
     }
@@ -868,13 +862,13 @@ static void test_round_trips(void) {
         path_in(stl, sizeof stl, scratch, "spider.stl");
         femlod_mesh *o1 = NULL, *s1 = NULL, *o2 = NULL, *s2 = NULL;
         if (write_ok(spider, obj, FEMLOD_FORMAT_AUTO)) o1 = read_ok(obj, FEMLOD_FORMAT_AUTO);
-        CHECK(same_mesh(spider, o1));
+        CHECK(shape_same_mesh(spider, o1));
         if (o1 && write_ok(o1, stl, FEMLOD_FORMAT_AUTO)) s1 = read_ok(stl, FEMLOD_FORMAT_AUTO);
-        CHECK(same_mesh(o1, s1));
+        CHECK(shape_same_mesh(o1, s1));
         if (s1 && write_ok(s1, obj, FEMLOD_FORMAT_OBJ)) o2 = read_ok(obj, FEMLOD_FORMAT_OBJ);
-        CHECK(same_mesh(spider, o2));
+        CHECK(shape_same_mesh(spider, o2));
         if (o2 && write_ok(o2, stl, FEMLOD_FORMAT_STL_ASCII)) s2 = read_ok(stl, FEMLOD_FORMAT_STL);
-        CHECK(same_mesh(spider, s2));
+        CHECK(shape_same_mesh(spider, s2));
         /* The writer's first line. */
         char *data;
         size_t size;
@@ -974,7 +968,7 @@ static void test_locale(void) {
             free(data);
         }
         femlod_mesh *b = read_ok(p, fmts[i]);
-        CHECK(same_mesh(a, b));
+        CHECK(shape_same_mesh(a, b));
         femlod_mesh_free(b);
         unlink(p);
     }
@@ -1078,7 +1072,7 @@ static void test_atomic_writes(void) {
     wo.format = FEMLOD_FORMAT_PLY_ASCII;
     CHECK(femlod_mesh_write(small, p, &wo, &err) == FEMLOD_OK);
     femlod_mesh *back = read_ok(p, FEMLOD_FORMAT_PLY);
-    CHECK(same_mesh(small, back));
+    CHECK(shape_same_mesh(small, back));
     femlod_mesh_free(back);
     unlink(p);
     /* A relative path (the folder to sync is "."). */
@@ -1086,7 +1080,7 @@ static void test_atomic_writes(void) {
     if (getcwd(cwd, sizeof cwd) && chdir(dir) == 0) {
         CHECK(femlod_mesh_write(small, "relative.off", NULL, &err) == FEMLOD_OK);
         back = read_ok("relative.off", FEMLOD_FORMAT_AUTO);
-        CHECK(same_mesh(small, back));
+        CHECK(shape_same_mesh(small, back));
         femlod_mesh_free(back);
         unlink("relative.off");
         CHECK(chdir(cwd) == 0);

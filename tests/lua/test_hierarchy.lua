@@ -771,4 +771,30 @@ do
 end
 -- }======
 
+-- {====== rescale: global LOD keeping the density (paper 5.3.2)
+do
+  local h = fandisk:simplify { target = 2000 }
+  local base = h:counts().triangles
+  T.check(h:rescale { factor = 1.5 } > 0, "rescale up does operations")
+  T.eq(h:counts().triangles, math.floor(1.5 * base + 0.5), "rescale by 1.5: the count")
+  h:rescale { target = 2500 }
+  T.eq(h:counts().triangles, 2500, "rescale to 2500: the count")
+  T.eq(h:validate(), true, "valid after rescale")
+  -- below the simplification's result the coarsest front is the answer
+  h:rescale { target = 10 }
+  T.eq(h:counts().triangles, base, "rescale below the coarsest: the simplification result")
+  local env = { h = h }
+  T.errmsg("code:1: bad argument #1 to 'rescale' (give exactly one of target and factor)",
+    "h:rescale{ target = 3, factor = 2 }", env)
+  T.errmsg("code:1: bad argument #1 to 'rescale' (give exactly one of target and factor)", "h:rescale{}", env)
+  T.errmsg("code:1: bad argument #1 to 'rescale' (unknown key 'targt'; valid keys: factor, target)",
+    "h:rescale{ targt = 3 }", env)
+  T.errmsg("code:1: bad argument #1 to 'rescale' (factor: must be a positive finite number)",
+    "h:rescale{ factor = -2 }", env)
+  T.errmsg("code:1: bad argument #1 to 'rescale' (target: must be an integer in 1..4294967295)",
+    "h:rescale{ target = 0 }", env)
+  T.errmsg("code:1: bad argument #1 to 'rescale' (table expected, got number)", "h:rescale(3)", env)
+end
+-- }======
+
 T.summary("test_hierarchy")
