@@ -43,6 +43,7 @@
  * papers' rule decide, through a Jacobi eigensolver.
  */
 #include "core.h"
+#include "vec3.h"
 
 #include <assert.h>
 #include <math.h>
@@ -56,24 +57,8 @@
 
 /* {====== small vector algebra */
 
-static double dot3(const double u[3], const double v[3]) {
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-}
 
-static void sub3(double out[3], const double a[3], const double b[3]) {
-    out[0] = a[0] - b[0];
-    out[1] = a[1] - b[1];
-    out[2] = a[2] - b[2];
-}
 
-static void cross3(double out[3], const double u[3], const double v[3]) {
-    double x = u[1] * v[2] - u[2] * v[1];
-    double y = u[2] * v[0] - u[0] * v[2];
-    double z = u[0] * v[1] - u[1] * v[0];
-    out[0] = x;
-    out[1] = y;
-    out[2] = z;
-}
 
 /* Scales v to unit length; returns 0 (v unchanged) when it has none. */
 static int normalize3(double v[3]) {

@@ -10,6 +10,7 @@
  * section 5.1.5), made safe for degenerate triangles.
  */
 #include "core.h"
+#include "vec3.h"
 
 #include <assert.h>
 #include <math.h>
@@ -26,15 +27,7 @@
 
 /* {====== vector helpers */
 
-static double dot3(const double u[3], const double v[3]) {
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-}
 
-static void sub3(double out[3], const double a[3], const double b[3]) {
-    out[0] = a[0] - b[0];
-    out[1] = a[1] - b[1];
-    out[2] = a[2] - b[2];
-}
 
 /* |p - (o + t d)|^2 */
 static double dist2_along(const double p[3], const double o[3], const double d[3], double t) {

@@ -16,22 +16,12 @@
  * Point-triangle distance: Ericson, "Real-Time Collision Detection", 5.1.5.
  */
 #include "intersect.h"
+#include "vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
-static inline void sub3(double r[3], const double a[3], const double b[3]) {
-    r[0] = a[0] - b[0]; r[1] = a[1] - b[1]; r[2] = a[2] - b[2];
-}
-static inline double dot3(const double a[3], const double b[3]) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-static inline void cross3(double r[3], const double a[3], const double b[3]) {
-    r[0] = a[1] * b[2] - a[2] * b[1];
-    r[1] = a[2] * b[0] - a[0] * b[2];
-    r[2] = a[0] * b[1] - a[1] * b[0];
-}
 
 static inline double mn(double a, double b) { return a < b ? a : b; }
 static inline double mx(double a, double b) { return a > b ? a : b; }

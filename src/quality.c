@@ -5,6 +5,7 @@
  * them: Table 1's columns plus angles, defects, histogram and topology.
  */
 #include "core.h"
+#include "vec3.h"
 
 #include <assert.h>
 #include <inttypes.h>
@@ -21,15 +22,7 @@ typedef struct tri_shape {
     double longest; /* max of len */
 } tri_shape;
 
-static double dot3(const double u[3], const double v[3]) {
-    return u[0] * v[0] + u[1] * v[1] + u[2] * v[2];
-}
 
-static void sub3(double out[3], const double a[3], const double b[3]) {
-    out[0] = a[0] - b[0];
-    out[1] = a[1] - b[1];
-    out[2] = a[2] - b[2];
-}
 
 static void shape_of(tri_shape *s, const double *p0, const double *p1, const double *p2) {
     const double *p[3] = {p0, p1, p2};

@@ -48,6 +48,7 @@
 #include "intersect.h"
 #include "quadric.h"
 #include "simplify_log.h"
+#include "vec3.h"
 
 #include <assert.h>
 #include <math.h>
@@ -233,22 +234,6 @@ static inline uint32_t min3u(const uint32_t t[3]) {
     return m < t[2] ? m : t[2];
 }
 
-static inline void sub3(double r[3], const double a[3], const double b[3]) {
-    r[0] = a[0] - b[0]; r[1] = a[1] - b[1]; r[2] = a[2] - b[2];
-}
-static inline double dot3(const double a[3], const double b[3]) {
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-static inline void cross3(double r[3], const double a[3], const double b[3]) {
-    r[0] = a[1] * b[2] - a[2] * b[1];
-    r[1] = a[2] * b[0] - a[0] * b[2];
-    r[2] = a[0] * b[1] - a[1] * b[0];
-}
-static inline double dist2(const double a[3], const double b[3]) {
-    double d[3];
-    sub3(d, a, b);
-    return dot3(d, d);
-}
 
 /* Stretch (4.1 3), method-notes "Element measures") from the corners. */
 static double tri_stretch(const double *a, const double *b, const double *c, double *size) {
