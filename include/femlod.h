@@ -583,6 +583,36 @@ femlod_status femlod_hierarchy_extract(femlod_hierarchy *h, femlod_mesh **out, u
 femlod_status femlod_hierarchy_rescale(femlod_hierarchy *h, size_t target, size_t *ops,
                                        femlod_error *err);
 
+/* Curvature LOD (paper 5.3.1a). set_curvature stores kappa (one value per
+ * input vertex, finite and >= 0, e.g. femlod_mesh_curvature's kappa of
+ * femlod_hierarchy_input_mesh) on the leaves and gives every internal node
+ * the maximum of its children's. FEMLOD_EINPUT on a bad value. */
+femlod_status femlod_hierarchy_set_curvature(femlod_hierarchy *h,
+                                             const double *kappa_per_input_vertex,
+                                             femlod_error *err);
+
+/* Maps a node's kappa to its size threshold T_S (length); a NaN return
+ * stops the operation with FEMLOD_ECANCELLED, leaving a valid front. */
+typedef double (*femlod_kappa_map_fn)(void *payload, double kappa);
+
+/* Refines (femlod_hierarchy_refine) with T_S from each node's kappa. With
+ * map NULL the map is linear: with K the `percentile` (in (0, 1]; NaN: 0.95)
+ * of the leaves' kappa, kappa >= K gives `fine` (NaN: 0, input elements
+ * there), kappa = 0 gives `coarse` (NaN: the largest e_size of the current
+ * front, so flat regions stay as they are), and T_S = coarse + (fine -
+ * coarse) kappa / K in between. With map, T_S = map(payload, kappa) and
+ * fine, coarse and percentile are unused. FEMLOD_EINPUT "no curvature: call
+ * femlod_hierarchy_set_curvature first" when no curvature was set, or on a
+ * negative or non-finite fine or coarse. *ops gets the splits done. */
+femlod_status femlod_hierarchy_refine_curvature(femlod_hierarchy *h, double fine, double coarse,
+                                                double percentile, femlod_kappa_map_fn map,
+                                                void *payload, size_t *ops, femlod_error *err);
+
+/* The hierarchy's input mesh (input vertices, input triangles without the
+ * degenerate ones the hierarchy dropped), newly allocated. */
+femlod_status femlod_hierarchy_input_mesh(const femlod_hierarchy *h, femlod_mesh **out,
+                                          femlod_error *err);
+
 /* Saves the hierarchy and its current front to a versioned binary file
  * (".flh", docs/formats.md) with a CRC-32 checksum, written atomically;
  * result (may be NULL) is the simplification's result, stored with it. */

@@ -192,6 +192,7 @@ void femlod_hierarchy_free(femlod_hierarchy *h) {
     free(h->removed_start);
     free(h->removed);
     free(h->created_start);
+    free(h->kappa);
     free(h->state);
     free(h->front);
     free(h->front_pos);

@@ -30,6 +30,7 @@ struct femlod_hierarchy {
     uint32_t *removed_start; /* nc+1 */
     uint32_t *removed;       /* face ids removed by each collapse */
     uint32_t *created_start; /* nc+1: created faces of c are nf_in + created_start[c] .. */
+    double *kappa;           /* nn or NULL: curvature (femlod_hierarchy_set_curvature) */
     /* state */
     uint8_t *state;        /* nn */
     uint32_t *front;       /* front nodes, in no particular order */

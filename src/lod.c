@@ -7,12 +7,17 @@
  * their children's, bottom-up), r = e_size / S_REF, and the count moves by
  * collapsing the pair whose parent has the smallest r or splitting the
  * front node with the largest r.
+ *
+ * Curvature LOD (5.3.1a): kappa on the leaves, the maximum of the children
+ * on internal nodes (a collapse keeps the larger kappa), and a refine whose
+ * size function maps a node's kappa to T_S.
  */
 #include "heap.h"
 #include "hierarchy.h"
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* r of every node for the current front. */
 static double *density_ratios(const femlod_hierarchy *h) {
@@ -181,3 +186,96 @@ femlod_status femlod_hierarchy_rescale(femlod_hierarchy *h, size_t target, size_
     if (ops) *ops = done;
     return FEMLOD_OK;
 }
+
+/* {====== Curvature LOD */
+
+femlod_status femlod_hierarchy_set_curvature(femlod_hierarchy *h, const double *kappa,
+                                             femlod_error *err) {
+    if (!kappa) return fl_error(err, FEMLOD_EINPUT, "kappa is NULL");
+    for (size_t x = 0; x < h->nv; x++)
+        if (!(kappa[x] >= 0.0) || !isfinite(kappa[x]))
+            return fl_error(err, FEMLOD_EINPUT,
+                            "kappa of input vertex %zu is %g (finite and >= 0 expected)", x,
+                            kappa[x]);
+    if (!h->kappa) {
+        h->kappa = fl_alloc(h->nn, sizeof(double));
+        if (!h->kappa)
+            return fl_error(err, FEMLOD_ENOMEM, "out of memory for the curvature of %zu nodes",
+                            h->nn);
+    }
+    if (h->nv) memcpy(h->kappa, kappa, h->nv * sizeof(double));
+    /* children have smaller ids than their parent: one pass upwards */
+    for (size_t x = h->nv; x < h->nn; x++) {
+        size_t c = x - h->nv;
+        h->kappa[x] = fmax(h->kappa[h->child[2 * c]], h->kappa[h->child[2 * c + 1]]);
+    }
+    return FEMLOD_OK;
+}
+
+typedef struct kappa_size {
+    const femlod_hierarchy *h;
+    double fine, coarse, top; /* top: the percentile of the leaves' kappa */
+    femlod_kappa_map_fn map;
+    void *payload;
+} kappa_size;
+
+static double kappa_threshold(void *payload, const femlod_node_info *node) {
+    const kappa_size *ks = (const kappa_size *)payload;
+    double k = ks->h->kappa[node->id];
+    if (ks->map) return ks->map(ks->payload, k);
+    if (!(k > 0.0)) return ks->coarse;
+    if (k >= ks->top) return ks->fine;
+    return ks->coarse + (ks->fine - ks->coarse) * (k / ks->top);
+}
+
+static int cmp_double(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+femlod_status femlod_hierarchy_refine_curvature(femlod_hierarchy *h, double fine, double coarse,
+                                                double percentile, femlod_kappa_map_fn map,
+                                                void *payload, size_t *ops, femlod_error *err) {
+    if (ops) *ops = 0;
+    if (!h->kappa)
+        return fl_error(err, FEMLOD_EINPUT, "no curvature: call femlod_hierarchy_set_curvature first");
+    kappa_size ks = {h, 0.0, 0.0, 0.0, map, payload};
+    if (!map) {
+        if (isnan(fine)) fine = 0.0;
+        if (isnan(percentile)) percentile = 0.95;
+        if (isnan(coarse)) {
+            coarse = 0.0;
+            for (size_t p = 0; p < h->front_n; p++) coarse = fmax(coarse, h->e_size[h->front[p]]);
+        }
+        if (!(fine >= 0.0) || !isfinite(fine))
+            return fl_error(err, FEMLOD_EINPUT, "fine is %g (finite and >= 0 expected)", fine);
+        if (!(coarse >= 0.0) || !isfinite(coarse))
+            return fl_error(err, FEMLOD_EINPUT, "coarse is %g (finite and >= 0 expected)", coarse);
+        if (!(percentile > 0.0 && percentile <= 1.0))
+            return fl_error(err, FEMLOD_EINPUT, "percentile is %g (in (0, 1] expected)",
+                            percentile);
+        if (h->nv) {
+            double *sorted = fl_alloc(h->nv, sizeof(double));
+            if (!sorted)
+                return fl_error(err, FEMLOD_ENOMEM, "out of memory for the kappa of %zu vertices",
+                                h->nv);
+            memcpy(sorted, h->kappa, h->nv * sizeof(double));
+            qsort(sorted, h->nv, sizeof(double), cmp_double);
+            /* nearest rank */
+            size_t rank = (size_t)ceil(percentile * (double)h->nv);
+            ks.top = sorted[rank > 0 ? rank - 1 : 0];
+            free(sorted);
+        }
+        ks.fine = fine;
+        ks.coarse = coarse;
+    }
+    return femlod_hierarchy_refine(h, 0.0, kappa_threshold, &ks, ops, err);
+}
+
+femlod_status femlod_hierarchy_input_mesh(const femlod_hierarchy *h, femlod_mesh **out,
+                                          femlod_error *err) {
+    *out = NULL;
+    return femlod_mesh_create(out, h->pos, h->nv, h->face_v, h->nf_in, err);
+}
+
+/* }====== */

@@ -82,6 +82,7 @@ typedef struct fl_hierarchy {
     int has_result;                /* 0: loaded from a file saved without one */
     size_t log_bytes;              /* the collapse log it was built from; 0 when loaded */
     int busy;                      /* a size function of refine/coarsen is running */
+    int has_curvature;             /* femlod_hierarchy_set_curvature was called */
 } fl_hierarchy;
 
 /* Creates the metatable, adds the module functions simplify and

@@ -762,6 +762,146 @@ static int hierarchy_rescale(lua_State *L) {
     return 1;
 }
 
+/* h:refine_curvature{ fine, coarse, map, radius, percentile }: curvature LOD
+ * (paper 5.3.1a, femlod_hierarchy_refine_curvature). The curvature of the
+ * input mesh is computed on the first call (or again when radius is given)
+ * and kept with the hierarchy. A map function runs like refine's size
+ * function: under lua_pcall, its failure raised once the core returned.
+ * Returns the splits done. */
+
+typedef struct kappa_call {
+    lua_State *L;
+    int fn;          /* stack index of the function */
+    int failed;      /* SIZE_*; on SIZE_ERROR the error value is on the top */
+    const char *got; /* SIZE_BAD_RESULT: what came back (static string) */
+    double kappa;    /* the argument of the current call */
+    double value;    /* its result */
+} kappa_call;
+
+/* Arguments: the function, the kappa_call. Raises freely: it runs under pcall. */
+static int kappa_call_lua(lua_State *L) {
+    kappa_call *kc = (kappa_call *)lua_touserdata(L, 2);
+    lua_pushvalue(L, 1);
+    lua_pushnumber(L, kc->kappa);
+    lua_call(L, 1, 1);
+    if (lua_type(L, -1) != LUA_TNUMBER) {
+        kc->failed = SIZE_BAD_RESULT;
+        kc->got = lua_typename(L, lua_type(L, -1));
+    } else {
+        kc->value = (double)lua_tonumber(L, -1);
+        if (isnan(kc->value)) {
+            kc->failed = SIZE_BAD_RESULT;
+            kc->got = "nan";
+        }
+    }
+    return 0;
+}
+
+/* femlod_kappa_map_fn: nothing here may raise (as call_size). */
+static double call_kappa_map(void *payload, double kappa) {
+    kappa_call *kc = (kappa_call *)payload;
+    lua_State *L = kc->L;
+    if (kc->failed != SIZE_OK) return NAN;
+    kc->kappa = kappa;
+    lua_pushcfunction(L, kappa_call_lua);
+    lua_pushvalue(L, kc->fn);
+    lua_pushlightuserdata(L, kc);
+    if (lua_pcall(L, 2, 0, 0) != LUA_OK) {
+        kc->failed = SIZE_ERROR;
+        return NAN;
+    }
+    return kc->failed == SIZE_OK ? kc->value : NAN;
+}
+
+/* Computes the input mesh's kappa (in a Lua-owned buffer, so that a raise
+ * leaks nothing) and stores it on the hierarchy. */
+static void set_curvature(lua_State *L, fl_hierarchy *h, double radius) {
+    femlod_error err;
+    femlod_mesh *in = NULL;
+    size_t nv = femlod_hierarchy_input_vertices(h->hier);
+    double *kappa = (double *)lua_newuserdatauv(L, (nv ? nv : 1) * sizeof(double), 0);
+    if (femlod_hierarchy_input_mesh(h->hier, &in, &err) != FEMLOD_OK) fl_lua_raise(L, &err);
+    femlod_curvature_options co = FEMLOD_CURVATURE_OPTIONS_INIT;
+    co.radius = radius;
+    femlod_status st = femlod_mesh_curvature(in, &co, NULL, NULL, kappa, NULL, NULL, &err);
+    femlod_mesh_free(in);
+    if (st == FEMLOD_OK) st = femlod_hierarchy_set_curvature(h->hier, kappa, &err);
+    if (st != FEMLOD_OK) fl_lua_raise(L, &err);
+    h->has_curvature = 1;
+    lua_pop(L, 1);
+}
+
+static int hierarchy_refine_curvature(lua_State *L) {
+    static const char *const keys[] = {"coarse", "fine", "map", "percentile", "radius", NULL};
+    fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    fl_opts o;
+    fl_opts_open(&o, L, 2, keys);
+    no_more_arguments(L, 3);
+    kappa_call kc = {L, 0, SIZE_OK, NULL, 0.0, 0.0};
+    int mt = fl_opts_push(&o, "map");
+    if (mt == LUA_TFUNCTION) {
+        kc.fn = lua_gettop(L); /* stays on the stack for the calls */
+    } else if (mt != LUA_TNIL) {
+        if (mt != LUA_TSTRING)
+            return fl_opts_error(&o, "map", lua_pushfstring(L, "'linear' or function expected, "
+                                                               "got %s",
+                                                            lua_typename(L, mt)));
+        if (strcmp(lua_tostring(L, -1), "linear") != 0)
+            return fl_opts_error(&o, "map", lua_pushfstring(L, "'linear' or function expected, "
+                                                               "got '%s'",
+                                                            lua_tostring(L, -1)));
+        lua_pop(L, 1);
+    }
+    double fine = NAN, coarse = NAN, percentile = NAN;
+    if (fl_opts_push(&o, "fine") != LUA_TNIL) {
+        lua_pop(L, 1);
+        fine = (double)fl_opts_number(&o, "fine", 0.0);
+        if (!(fine >= 0.0) || !(fine < HUGE_VAL))
+            return fl_opts_error(&o, "fine", "must be a finite number >= 0");
+    }
+    if (fl_opts_push(&o, "coarse") != LUA_TNIL) {
+        lua_pop(L, 1);
+        coarse = (double)fl_opts_number(&o, "coarse", 0.0);
+        if (!(coarse >= 0.0) || !(coarse < HUGE_VAL))
+            return fl_opts_error(&o, "coarse", "must be a finite number >= 0");
+    }
+    if (fl_opts_push(&o, "percentile") != LUA_TNIL) {
+        lua_pop(L, 1);
+        percentile = (double)fl_opts_number(&o, "percentile", 0.95);
+        if (!(percentile > 0.0 && percentile <= 1.0))
+            return fl_opts_error(&o, "percentile", "must be in (0, 1]");
+    }
+    if (kc.fn && !(isnan(fine) && isnan(coarse) && isnan(percentile)))
+        return luaL_argerror(L, 2, "a map function replaces fine, coarse and percentile: "
+                                   "give one or the other");
+    int has_radius = fl_opts_push(&o, "radius") != LUA_TNIL;
+    if (has_radius) {
+        lua_pop(L, 1);
+        double radius = (double)fl_opts_number(&o, "radius", 0.0);
+        if (!(radius >= 0.0) || !(radius < HUGE_VAL))
+            return fl_opts_error(&o, "radius", "must be a finite number >= 0");
+        set_curvature(L, h, radius);
+    } else if (!h->has_curvature) {
+        set_curvature(L, h, 0.0);
+    }
+    luaL_checkstack(L, 4, NULL); /* for call_kappa_map, which must not raise */
+    size_t ops = 0;
+    femlod_error err;
+    h->busy = 1;
+    femlod_status st = femlod_hierarchy_refine_curvature(h->hier, fine, coarse, percentile,
+                                                         kc.fn ? call_kappa_map : NULL, &kc, &ops,
+                                                         &err);
+    h->busy = 0;
+    if (kc.failed == SIZE_ERROR) return lua_error(L);
+    if (kc.failed == SIZE_BAD_RESULT)
+        return fl_opts_error(&o, "map", lua_pushfstring(L, "function returned %s for kappa %f "
+                                                           "(number expected)",
+                                                        kc.got, (lua_Number)kc.kappa));
+    if (st != FEMLOD_OK) return fl_lua_raise(L, &err);
+    lua_pushinteger(L, (lua_Integer)ops);
+    return 1;
+}
+
 /* }====== */
 
 static int hierarchy_node(lua_State *L) {
@@ -895,6 +1035,7 @@ static const luaL_Reg hierarchy_methods[] = {
     {"refine", hierarchy_refine},
     {"coarsen", hierarchy_coarsen},
     {"rescale", hierarchy_rescale},
+    {"refine_curvature", hierarchy_refine_curvature},
     {"split", hierarchy_split},
     {"collapse", hierarchy_collapse},
     {"counts", hierarchy_counts},

@@ -7,6 +7,7 @@
 #include "meshcheck.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 static femlod_mesh *load(const char *name) {
     char path[1024];
@@ -443,6 +444,62 @@ static double spearman(const double *a, const double *b, size_t n) {
     return saa > 0 && sbb > 0 ? sab / sqrt(saa * sbb) : 1.0;
 }
 
+static double nan_map(void *payload, double kappa) {
+    (void)payload;
+    (void)kappa;
+    return NAN;
+}
+
+/* Curvature LOD (5.3.1a): internal nodes carry the max of their children's
+ * kappa; refine_curvature needs the curvature, splits, keeps the front
+ * valid, and a NaN from the map cancels. */
+static void test_curvature_lod(void) {
+    femlod_mesh *in = load("fandisk.obj"), *out = NULL, *im = NULL;
+    femlod_collapse_log *log = NULL;
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = 1500;
+    CHECK(femlod_simplify(&out, &log, in, &o, NULL, NULL) == FEMLOD_OK);
+    femlod_hierarchy *h = NULL;
+    CHECK(femlod_hierarchy_create(&h, in, log, NULL) == FEMLOD_OK);
+    femlod_error err;
+    size_t ops = 1;
+    CHECK(femlod_hierarchy_refine_curvature(h, NAN, NAN, NAN, NULL, NULL, &ops, &err) ==
+          FEMLOD_EINPUT);
+    CHECK(strcmp(err.message, "no curvature: call femlod_hierarchy_set_curvature first") == 0);
+    CHECK(ops == 0);
+    CHECK(femlod_hierarchy_input_mesh(h, &im, NULL) == FEMLOD_OK);
+    CHECK(same_mesh(im, in));
+    size_t nv = femlod_mesh_vertex_count(im);
+    double *kappa = calloc(nv, sizeof(double));
+    CHECK(kappa != NULL);
+    CHECK(femlod_mesh_curvature(im, NULL, NULL, NULL, kappa, NULL, NULL, NULL) == FEMLOD_OK);
+    kappa[0] = -1.0;
+    CHECK(femlod_hierarchy_set_curvature(h, kappa, NULL) == FEMLOD_EINPUT);
+    kappa[0] = 0.0;
+    CHECK(femlod_hierarchy_set_curvature(h, kappa, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_refine_curvature(h, NAN, NAN, NAN, nan_map, NULL, &ops, NULL) ==
+          FEMLOD_ECANCELLED);
+    CHECK(femlod_hierarchy_validate(h, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_refine_curvature(h, -1.0, NAN, NAN, NULL, NULL, &ops, NULL) ==
+          FEMLOD_EINPUT);
+    size_t before = femlod_hierarchy_front_triangles(h);
+    CHECK(femlod_hierarchy_refine_curvature(h, NAN, NAN, NAN, NULL, NULL, &ops, NULL) == FEMLOD_OK);
+    CHECK(ops > 0 && femlod_hierarchy_front_triangles(h) > before);
+    CHECK(femlod_hierarchy_validate(h, NULL) == FEMLOD_OK);
+    size_t after = femlod_hierarchy_front_triangles(h);
+    /* fine = coarse = 0: every threshold is 0, the input mesh */
+    CHECK(femlod_hierarchy_refine_curvature(h, 0.0, 0.0, 1.0, NULL, NULL, &ops, NULL) ==
+          FEMLOD_OK);
+    CHECK(femlod_hierarchy_front_triangles(h) == femlod_mesh_triangle_count(in));
+    printf("curvature LOD on fandisk -> 1500: %zu -> %zu triangles\n", before, after);
+    free(kappa);
+    femlod_mesh_free(im);
+    femlod_hierarchy_free(h);
+    femlod_collapse_log_free(log);
+    femlod_mesh_free(out);
+    femlod_mesh_free(in);
+}
+
 /* Global LOD (5.3.2): from a front with a fine region, rescale up and down;
  * the count lands within 0.5% of the target and the regions keep their
  * order of element sizes. */
@@ -524,6 +581,7 @@ int main(void) {
     int is_heavy = !(heavy && heavy[0] == '0');
     test_checker();
     test_refine_ball();
+    test_curvature_lod();
     /* fandisk at 1,500 triangles is mostly at its coarsest, where a rescale
      * down cannot keep the density: its correlations are printed, the
      * count is asserted (docs/algorithms.md, 5.3.2) */

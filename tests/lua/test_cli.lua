@@ -578,6 +578,19 @@ do
   T.check(refined > 2000 and refined < 12946, "lod.lua wrote the refined mesh: " .. refined)
   T.check(text:find("\nfandisk%.obj %([^)]*%) | refined near a corner | " .. refined .. " | "), "lod.lua: the refined row")
   T.check(T.exists(ex_out .. "/fandisk.flh"), "lod.lua saved the hierarchy")
+
+  -- The CAE recipe: simplify to 12k, refine curvature, rescale (docs/guide.md).
+  code, text, err = run(P.examples .. "/recipe_cae.lua")
+  T.eq(code, 0, "examples/recipe_cae.lua runs: " .. err)
+  T.eq(err, "", "recipe_cae.lua: nothing on stderr")
+  T.check(text:find("^model %(H x W x D%) | state | elements"), "recipe_cae.lua prints Table 1: " .. text)
+  local rows = {}
+  for state, n in text:gmatch("\ncover%.obj %([^)]*%) | ([%a ]+) | (%d+) | ") do rows[#rows + 1] = { state, tonumber(n) } end
+  T.eq(#rows, 4, "recipe_cae.lua: 4 rows")
+  T.eq(rows[1] and rows[1][1], "original", "recipe_cae.lua: the original's row")
+  T.eq(rows[2] and rows[2][2], 12000, "recipe_cae.lua: simplified to 12000")
+  T.check(rows[3] and rows[3][1] == "curvature" and rows[3][2] > 12000, "recipe_cae.lua: curvature refines")
+  T.eq(rows[4] and rows[4][2], 12000, "recipe_cae.lua: rescaled back to 12000")
 end
 -- }======
 

@@ -797,4 +797,105 @@ do
 end
 -- }======
 
+-- {====== refine_curvature: curvature LOD (paper 5.3.1a)
+do
+  local h = fandisk:simplify { target = 2000 }
+  local base = h:counts().triangles
+  local kappa = fandisk:curvature().kappa -- the same default radius as refine_curvature's
+  local sorted = {}
+  for i = 1, #kappa do sorted[i] = kappa[i] end
+  table.sort(sorted)
+  local k_hi, k_lo = sorted[math.ceil(0.95 * #sorted)], sorted[math.ceil(0.1 * #sorted)] -- k_lo: flat (0)
+  -- input vertices in a grid of cells, for the nearest input vertex of a point
+  local cell, grid = 3 * fandisk:quality().size_max, {}
+  local function cell_key(i, j, k) return i .. " " .. j .. " " .. k end
+  for i, p in ipairs(input_pos) do
+    local ck = cell_key(math.floor(p[1] / cell), math.floor(p[2] / cell), math.floor(p[3] / cell))
+    local list = grid[ck] or {}
+    grid[ck] = list
+    list[#list + 1] = i
+  end
+  local function nearest(g)
+    local ci, cj, ck = math.floor(g[1] / cell), math.floor(g[2] / cell), math.floor(g[3] / cell)
+    local best, bd = nil, huge
+    for i = ci - 1, ci + 1 do for j = cj - 1, cj + 1 do for k = ck - 1, ck + 1 do
+      for _, v in ipairs(grid[cell_key(i, j, k)] or {}) do
+        local d = dist(g, input_pos[v])
+        if d < bd then best, bd = v, d end
+      end
+    end end end
+    return best
+  end
+  -- mean triangle area near high-kappa (>= 95th percentile) and flat
+  -- (<= 10th percentile: kappa 0 on fandisk) input vertices
+  local function sizes(mesh)
+    local pos, hi, lo = mesh:positions(), { n = 0, a = 0 }, { n = 0, a = 0 }
+    for _, t in ipairs(mesh:triangles()) do
+      local a, b, c = pos[t[1]], pos[t[2]], pos[t[3]]
+      local u = { b[1] - a[1], b[2] - a[2], b[3] - a[3] }
+      local w = { c[1] - a[1], c[2] - a[2], c[3] - a[3] }
+      local area = 0.5 * sqrt((u[2] * w[3] - u[3] * w[2]) ^ 2 + (u[3] * w[1] - u[1] * w[3]) ^ 2
+        + (u[1] * w[2] - u[2] * w[1]) ^ 2)
+      local v = nearest({ (a[1] + b[1] + c[1]) / 3, (a[2] + b[2] + c[2]) / 3, (a[3] + b[3] + c[3]) / 3 })
+      local r = v and (kappa[v] >= k_hi and hi or kappa[v] <= k_lo and lo)
+      if r then r.n, r.a = r.n + 1, r.a + area end
+    end
+    return hi.a / hi.n, lo.a / lo.n, hi.n, lo.n
+  end
+  local hi0, lo0 = sizes(h:mesh())
+  local ops = h:refine_curvature {}
+  local n = h:counts().triangles
+  T.check(ops > 0 and n > base, "refine_curvature{} splits: " .. base .. " -> " .. n)
+  local mesh = h:mesh()
+  local hi1, lo1, nhi, nlo = sizes(mesh)
+  print(string.format("refine_curvature on fandisk -> 2000: %d splits, %d triangles; mean area near "
+    .. "high kappa %.4g -> %.4g (%d), near low kappa %.4g -> %.4g (%d)", ops, n, hi0, hi1, nhi, lo0, lo1, nlo))
+  T.check(hi1 < 0.5 * lo1, "finer near high curvature than on flat parts")
+  T.check(hi1 < 0.5 * hi0, "high-curvature regions became finer")
+  local q = mesh:quality()
+  T.check(q.stretch_min >= math.min(S.thresholds.min_stretch, fandisk:quality().stretch_min),
+    "stretch >= min_stretch or the input's: " .. q.stretch_min)
+  T.check(q.valence_max <= S.thresholds.max_valence, "valence <= max_valence")
+  T.check(q.closed and q.manifold and q.oriented, "closed, manifold and oriented")
+  T.eq(q.degenerate + q.duplicate, 0, "no degenerate or duplicate triangle")
+  T.eq(h:validate(), true, "validate after refine_curvature")
+  -- coarse defaults to the front's largest e_size, which the refine lowered:
+  -- with the values given, a second call has nothing left to split
+  T.check(h:refine_curvature { coarse = 0.05 } >= 0, "coarse given")
+  T.eq(h:refine_curvature { coarse = 0.05 }, 0, "the same call again: no split")
+  -- fine = coarse = 0 everywhere with a map: the input mesh
+  T.check(h:refine_curvature { map = function() return 0 end } > 0, "a map function")
+  T.eq(h:counts().triangles, fandisk:counts().triangles, "map returning 0: the input's count")
+  -- a map that raises: raised after the core returned, the front still valid
+  local h2 = fandisk:simplify { target = 2000 }
+  local env = { h = h2 }
+  T.errmsg("code:1: boom", "h:refine_curvature { map = function(k) error('boom') end }", env)
+  T.eq(h2:validate(), true, "valid after a failing map")
+  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: function returned string for kappa 0.0 "
+    .. "(number expected))", "h:refine_curvature { map = function(k) return 'x' end }", env)
+  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (unknown key 'fien'; valid keys: coarse, fine, "
+    .. "map, percentile, radius)", "h:refine_curvature { fien = 1 }", env)
+  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: 'linear' or function expected, got 'cubic')",
+    "h:refine_curvature { map = 'cubic' }", env)
+  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: 'linear' or function expected, got number)",
+    "h:refine_curvature { map = 3 }", env)
+  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (fine: must be a finite number >= 0)",
+    "h:refine_curvature { fine = -1 }", env)
+  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (coarse: must be a finite number >= 0)",
+    "h:refine_curvature { coarse = math.huge }", env)
+  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (percentile: must be in (0, 1])",
+    "h:refine_curvature { percentile = 0 }", env)
+  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (radius: must be a finite number >= 0)",
+    "h:refine_curvature { radius = -1 }", env)
+  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (a map function replaces fine, coarse and "
+    .. "percentile: give one or the other)", "h:refine_curvature { map = function() return 0 end, fine = 1 }", env)
+  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (fine: number expected, got string)",
+    "h:refine_curvature { fine = 'x' }", env)
+  -- an explicit radius recomputes; linear map, explicit values
+  T.check(h2:refine_curvature { radius = 0.05, fine = 0.01, percentile = 0.9, map = "linear" } > 0,
+    "explicit radius, fine and percentile")
+  T.eq(h2:validate(), true, "valid after explicit options")
+end
+-- }======
+
 T.summary("test_hierarchy")
