@@ -319,16 +319,24 @@ static double ball_size(void *payload, const femlod_node_info *n) {
     return d2 <= b->r * b->r ? b->inside : b->outside;
 }
 
+/* Simplifies `in` to `target` with default thresholds and builds its
+ * hierarchy; *out and *log are the caller's to free. */
+static femlod_hierarchy *simplified(const femlod_mesh *in, size_t target, femlod_mesh **out,
+                                    femlod_collapse_log **log) {
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = target;
+    femlod_hierarchy *h = NULL;
+    CHECK(femlod_simplify(out, log, in, &o, NULL, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_create(&h, in, *log, NULL) == FEMLOD_OK);
+    return h;
+}
+
 /* Local LOD by a size function: fine inside a ball, coarse outside. Counts
  * triangles by centroid and their largest size on both sides. */
 static void test_refine_ball(void) {
     femlod_mesh *in = load("fandisk.obj"), *out = NULL, *m = NULL;
     femlod_collapse_log *log = NULL;
-    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
-    o.target = 1500;
-    CHECK(femlod_simplify(&out, &log, in, &o, NULL, NULL) == FEMLOD_OK);
-    femlod_hierarchy *h = NULL;
-    CHECK(femlod_hierarchy_create(&h, in, log, NULL) == FEMLOD_OK);
+    femlod_hierarchy *h = simplified(in, 1500, &out, &log);
     ball b = {{0.0, 0.0, 0.5}, 0.25, 0.0, INFINITY};
     size_t ops = 0;
     CHECK(femlod_hierarchy_refine(h, 0, ball_size, &b, &ops, NULL) == FEMLOD_OK);
@@ -456,11 +464,7 @@ static double nan_map(void *payload, double kappa) {
 static void test_curvature_lod(void) {
     femlod_mesh *in = load("fandisk.obj"), *out = NULL, *im = NULL;
     femlod_collapse_log *log = NULL;
-    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
-    o.target = 1500;
-    CHECK(femlod_simplify(&out, &log, in, &o, NULL, NULL) == FEMLOD_OK);
-    femlod_hierarchy *h = NULL;
-    CHECK(femlod_hierarchy_create(&h, in, log, NULL) == FEMLOD_OK);
+    femlod_hierarchy *h = simplified(in, 1500, &out, &log);
     femlod_error err;
     size_t ops = 1;
     CHECK(femlod_hierarchy_refine_curvature(h, NAN, NAN, NAN, NULL, NULL, &ops, &err) ==
@@ -507,11 +511,7 @@ static void test_rescale(const char *name, size_t target0, int with_ball, int N,
                          int assert_density) {
     femlod_mesh *in = load(name), *out = NULL;
     femlod_collapse_log *log = NULL;
-    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
-    o.target = target0;
-    CHECK(femlod_simplify(&out, &log, in, &o, NULL, NULL) == FEMLOD_OK);
-    femlod_hierarchy *h = NULL;
-    CHECK(femlod_hierarchy_create(&h, in, log, NULL) == FEMLOD_OK);
+    femlod_hierarchy *h = simplified(in, target0, &out, &log);
     double lo[3], hi[3];
     femlod_mesh_bbox(in, lo, hi);
     /* a finer region, not down to the input (where it could not get finer) */
@@ -552,7 +552,7 @@ static void test_rescale(const char *name, size_t target0, int with_ball, int N,
         CHECK(fabs((double)t - reachable) <= 0.005 * reachable);
         /* below the coarsest front the density cannot be kept: all is coarse */
         if ((double)target >= reachable && assert_density) CHECK(rho >= 0.9);
-        check_front(g, &in_top, o.min_stretch > 0 ? o.min_stretch : 0.2, INFINITY, in);
+        check_front(g, &in_top, 0.2 /* the default min_stretch */, INFINITY, in);
         femlod_mesh_free(m);
         femlod_hierarchy_free(g);
     }
