@@ -608,6 +608,51 @@ femlod_status femlod_hierarchy_refine_curvature(femlod_hierarchy *h, double fine
                                                 double percentile, femlod_kappa_map_fn map,
                                                 void *payload, size_t *ops, femlod_error *err);
 
+/* Region LOD (paper 5.3.1b). A region is a sphere or a box (tested on node
+ * positions), or marks: one byte per node (FEMLOD_REGION_NODES, node_count
+ * bytes) or per input vertex (FEMLOD_REGION_VERTICES, input_vertices
+ * bytes), nonzero inside. Zero-initialise and set what the kind uses. */
+typedef enum femlod_region_kind {
+    FEMLOD_REGION_SPHERE = 0, /* center, radius (lengths) */
+    FEMLOD_REGION_BOX = 1,    /* min, max corners */
+    FEMLOD_REGION_NODES = 2,  /* marks per node */
+    FEMLOD_REGION_VERTICES = 3 /* marks per input vertex */
+} femlod_region_kind;
+
+typedef struct femlod_region {
+    femlod_region_kind kind;
+    double center[3], radius;
+    double min[3], max[3];
+    const unsigned char *marks;
+} femlod_region;
+
+/* Every node's distance to the region (length), into d (node_count
+ * doubles): 0 for a node inside (by position, or marked, or with a marked
+ * node below it); otherwise, for a sphere or box, the Euclidean distance of
+ * the nearest of the node and its descendants, and for marks the shortest
+ * path along the input mesh's edges from the nearest marked input vertex
+ * below or at the node (INFINITY when no marked vertex is connected to it).
+ * FEMLOD_EINPUT on a non-finite or inverted shape or NULL marks. */
+femlod_status femlod_hierarchy_region_distance(const femlod_hierarchy *h,
+                                               const femlod_region *region, double *d,
+                                               femlod_error *err);
+
+/* Refines (femlod_hierarchy_refine) so that the front inside the region
+ * reaches element size `size` (length, 0: the input's elements): T_S(x) =
+ * size + (grading - 1) d(x) with d the region distance above, so sizes grow
+ * by at most the factor `grading` (>= 1) from one element to the next away
+ * from the region; grading INFINITY refines the inside only. Only the child
+ * that holds the region keeps the small threshold on a split (the paper's
+ * rule that the child nearest the marked position inherits T_S). Only
+ * refines: nodes farther than (e_size - size) / (grading - 1) from the
+ * region are not split, except where a split inside needs them (the
+ * hierarchy's dependencies). *ops gets the splits done, *inside (may be
+ * NULL) the number of nodes at distance 0. FEMLOD_EINPUT on a negative or
+ * non-finite size, grading < 1 or NaN, or a bad region. */
+femlod_status femlod_hierarchy_refine_region(femlod_hierarchy *h, const femlod_region *region,
+                                             double size, double grading, size_t *ops,
+                                             size_t *inside, femlod_error *err);
+
 /* The hierarchy's input mesh (input vertices, input triangles without the
  * degenerate ones the hierarchy dropped), newly allocated. */
 femlod_status femlod_hierarchy_input_mesh(const femlod_hierarchy *h, femlod_mesh **out,

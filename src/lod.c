@@ -11,6 +11,10 @@
  * Curvature LOD (5.3.1a): kappa on the leaves, the maximum of the children
  * on internal nodes (a collapse keeps the larger kappa), and a refine whose
  * size function maps a node's kappa to T_S.
+ *
+ * Region LOD (5.3.1b): a distance to the region on every node, the minimum
+ * over its subtree (the nearest-child inheritance rule), and a refine to
+ * size + (grading - 1) * distance.
  */
 #include "heap.h"
 #include "hierarchy.h"
@@ -276,6 +280,164 @@ femlod_status femlod_hierarchy_input_mesh(const femlod_hierarchy *h, femlod_mesh
                                           femlod_error *err) {
     *out = NULL;
     return femlod_mesh_create(out, h->pos, h->nv, h->face_v, h->nf_in, err);
+}
+
+/* }====== */
+
+/* {====== Region LOD (paper 5.3.1b)
+ *
+ * The region marks nodes: by position (sphere, box, a per-node mark) or by
+ * input vertex (a per-vertex mark). d(x) is a node's distance to the region:
+ * 0 for a marked node; a leaf's is the Euclidean distance to the sphere or
+ * box, or for marks the shortest path along input edges to a marked vertex
+ * (the surface, not the air: the far side of a thin wall is not "near");
+ * an internal node's is the smaller of its own and its children's. The
+ * threshold is T(x) = size + (grading - 1) d(x) (size inside, and no
+ * threshold where grading is infinite).
+ *
+ * The minimum over the children is the paper's inheritance rule made exact
+ * for regions: when a node whose subtree reaches the region splits, the
+ * child that holds the marked leaf (the one nearest the marked position)
+ * keeps the small threshold and the other gets the one of its own
+ * distance, so refinement follows the region down the hierarchy instead of
+ * spreading over everything its coarse ancestors covered.
+ *
+ * Grading: two front neighbours at distance L differ in d by at most L
+ * (d is 1-Lipschitz along the surface), so their thresholds differ by at
+ * most (grading - 1) L; where the front has been refined to its thresholds
+ * (L <= T) their ratio is at most `grading`. */
+
+static double dist_box(const double p[3], const double lo[3], const double hi[3]) {
+    double s = 0.0;
+    for (int k = 0; k < 3; k++) {
+        double e = p[k] < lo[k] ? lo[k] - p[k] : p[k] > hi[k] ? p[k] - hi[k] : 0.0;
+        s += e * e;
+    }
+    return sqrt(s);
+}
+
+static double dist_sphere(const double p[3], const double c[3], double r) {
+    double s = 0.0;
+    for (int k = 0; k < 3; k++) s += (p[k] - c[k]) * (p[k] - c[k]);
+    double d = sqrt(s) - r;
+    return d > 0.0 ? d : 0.0;
+}
+
+/* Shortest paths along the input edges from the leaves with d == 0 (the
+ * others start at +inf); Dijkstra with the indexed heap (max-heap: keys
+ * negated). Ties pop by index, so the result depends only on the mesh. */
+static femlod_status leaf_paths(const femlod_hierarchy *h, double *d, femlod_error *err) {
+    fl_adjacency adj;
+    femlod_status st = fl_adjacency_build(&adj, h->face_v, h->nf_in, h->nv, err);
+    if (st != FEMLOD_OK) return st;
+    fl_heap heap;
+    if (!fl_heap_init(&heap, h->nv)) {
+        fl_adjacency_free(&adj);
+        return fl_error(err, FEMLOD_ENOMEM, "out of memory for the distances of %zu vertices",
+                        h->nv);
+    }
+    for (size_t v = 0; v < h->nv; v++)
+        if (d[v] == 0.0) fl_heap_set(&heap, (uint32_t)v, -0.0);
+    while (fl_heap_size(&heap) > 0) {
+        double key;
+        uint32_t v = fl_heap_pop(&heap, &key);
+        double dv = -key;
+        if (dv > d[v]) continue;
+        const double *pv = h->pos + 3 * (size_t)v;
+        for (uint32_t n = adj.nbr_start[v]; n < adj.nbr_start[v + 1]; n++) {
+            uint32_t w = adj.vert_nbrs[n];
+            const double *pw = h->pos + 3 * (size_t)w;
+            double e = sqrt((pv[0] - pw[0]) * (pv[0] - pw[0]) + (pv[1] - pw[1]) * (pv[1] - pw[1]) +
+                            (pv[2] - pw[2]) * (pv[2] - pw[2]));
+            if (dv + e < d[w]) {
+                d[w] = dv + e;
+                fl_heap_set(&heap, w, -d[w]);
+            }
+        }
+    }
+    fl_heap_free(&heap);
+    fl_adjacency_free(&adj);
+    return FEMLOD_OK;
+}
+
+typedef struct region_size {
+    const double *d;
+    double size, slope; /* slope = grading - 1; INFINITY: none */
+} region_size;
+
+static double region_threshold(void *payload, const femlod_node_info *node) {
+    const region_size *rs = (const region_size *)payload;
+    double d = rs->d[node->id];
+    if (d == 0.0) return rs->size;
+    if (isinf(rs->slope) || isinf(d)) return INFINITY;
+    return rs->size + rs->slope * d;
+}
+
+femlod_status femlod_hierarchy_region_distance(const femlod_hierarchy *h,
+                                               const femlod_region *region, double *d,
+                                               femlod_error *err) {
+    if (!region) return fl_error(err, FEMLOD_EINPUT, "region is NULL");
+    const femlod_region *r = region;
+    switch (r->kind) {
+    case FEMLOD_REGION_SPHERE:
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(r->center[k]))
+                return fl_error(err, FEMLOD_EINPUT, "sphere center[%d] is %g (finite expected)",
+                                k, r->center[k]);
+        if (!(r->radius >= 0.0) || !isfinite(r->radius))
+            return fl_error(err, FEMLOD_EINPUT, "sphere radius is %g (finite and >= 0 expected)",
+                            r->radius);
+        for (size_t x = 0; x < h->nn; x++) d[x] = dist_sphere(h->pos + 3 * x, r->center, r->radius);
+        break;
+    case FEMLOD_REGION_BOX:
+        for (int k = 0; k < 3; k++)
+            if (!isfinite(r->min[k]) || !isfinite(r->max[k]) || r->min[k] > r->max[k])
+                return fl_error(err, FEMLOD_EINPUT,
+                                "box min[%d] = %g, max[%d] = %g (finite, min <= max expected)", k,
+                                r->min[k], k, r->max[k]);
+        for (size_t x = 0; x < h->nn; x++) d[x] = dist_box(h->pos + 3 * x, r->min, r->max);
+        break;
+    case FEMLOD_REGION_NODES:
+    case FEMLOD_REGION_VERTICES: {
+        if (!r->marks) return fl_error(err, FEMLOD_EINPUT, "region marks are NULL");
+        size_t n = r->kind == FEMLOD_REGION_NODES ? h->nn : h->nv;
+        for (size_t x = 0; x < h->nn; x++) d[x] = x < n && r->marks[x] ? 0.0 : INFINITY;
+        femlod_status st = leaf_paths(h, d, err);
+        if (st != FEMLOD_OK) return st;
+        break;
+    }
+    default:
+        return fl_error(err, FEMLOD_EINPUT, "unknown region kind %d", (int)r->kind);
+    }
+    /* children have smaller ids than their parent: one pass upwards */
+    for (size_t x = h->nv; x < h->nn; x++) {
+        size_t c = x - h->nv;
+        d[x] = fmin(d[x], fmin(d[h->child[2 * c]], d[h->child[2 * c + 1]]));
+    }
+    return FEMLOD_OK;
+}
+
+femlod_status femlod_hierarchy_refine_region(femlod_hierarchy *h, const femlod_region *region,
+                                             double size, double grading, size_t *ops,
+                                             size_t *inside, femlod_error *err) {
+    if (ops) *ops = 0;
+    if (inside) *inside = 0;
+    if (!(size >= 0.0) || !isfinite(size))
+        return fl_error(err, FEMLOD_EINPUT, "size is %g (finite and >= 0 expected)", size);
+    if (!(grading >= 1.0))
+        return fl_error(err, FEMLOD_EINPUT, "grading is %g (>= 1 or infinite expected)", grading);
+    double *d = fl_alloc(h->nn ? h->nn : 1, sizeof(double));
+    if (!d)
+        return fl_error(err, FEMLOD_ENOMEM, "out of memory for the distances of %zu nodes", h->nn);
+    femlod_status st = femlod_hierarchy_region_distance(h, region, d, err);
+    if (st == FEMLOD_OK && inside)
+        for (size_t x = 0; x < h->nn; x++) *inside += d[x] == 0.0;
+    if (st == FEMLOD_OK) {
+        region_size rs = {d, size, grading - 1.0};
+        st = femlod_hierarchy_refine(h, 0.0, region_threshold, &rs, ops, err);
+    }
+    free(d);
+    return st;
 }
 
 /* }====== */

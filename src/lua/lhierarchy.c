@@ -904,6 +904,172 @@ static int hierarchy_refine_curvature(lua_State *L) {
 
 /* }====== */
 
+/* h:refine_region{ sphere = {center = {x, y, z}, radius = r} | box = {min =
+ * {...}, max = {...}} | vertices = {...} | where = function(x, y, z) ->
+ * boolean, size = T, grading = g }: region LOD (paper 5.3.1b,
+ * femlod_hierarchy_refine_region). Exactly one region key. The where
+ * function is called for every node's position before the core runs, so
+ * its errors are the recipe's own (nothing C-owned is alive yet). Returns
+ * the splits done and the number of nodes found inside. */
+
+/* t[key] as a list of 3 finite numbers, into v. */
+static void region_point(lua_State *L, const fl_opts *o, const char *shape, int t,
+                         const char *key, double v[3]) {
+    int ty = lua_getfield(L, t, key);
+    if (ty != LUA_TTABLE || luaL_len(L, -1) != 3)
+        fl_opts_error(o, shape, lua_pushfstring(L, "%s: {x, y, z} expected, got %s", key,
+                                                ty == LUA_TTABLE ? "a table of another length"
+                                                                 : lua_typename(L, ty)));
+    for (lua_Integer i = 1; i <= 3; i++) {
+        int isnum = 0;
+        lua_geti(L, -1, i);
+        v[i - 1] = (double)lua_tonumberx(L, -1, &isnum);
+        if (lua_type(L, -1) != LUA_TNUMBER || !isnum || !isfinite(v[i - 1]))
+            fl_opts_error(o, shape, lua_pushfstring(L, "%s[%I]: finite number expected", key, i));
+        lua_pop(L, 1);
+    }
+    lua_pop(L, 1);
+}
+
+/* Rejects keys of a shape table other than the two it has. */
+static void region_keys(lua_State *L, const fl_opts *o, const char *shape, int t, const char *a,
+                        const char *b) {
+    lua_pushnil(L);
+    while (lua_next(L, t)) {
+        lua_pop(L, 1);
+        const char *k = lua_type(L, -1) == LUA_TSTRING ? lua_tostring(L, -1) : NULL;
+        if (!k || (strcmp(k, a) != 0 && strcmp(k, b) != 0)) {
+            if (k)
+                lua_pushfstring(L, "'%s'", k);
+            else
+                luaL_tolstring(L, -1, NULL);
+            fl_opts_error(o, shape, lua_pushfstring(L, "unknown key %s; valid keys: %s, %s",
+                                                    lua_tostring(L, -1), a, b));
+        }
+    }
+}
+
+static int hierarchy_refine_region(lua_State *L) {
+    static const char *const keys[] = {"box", "grading", "size", "sphere", "vertices", "where",
+                                       NULL};
+    static const char *const shapes[] = {"sphere", "box", "vertices", "where"};
+    fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    luaL_checktype(L, 2, LUA_TTABLE);
+    fl_opts o;
+    fl_opts_open(&o, L, 2, keys);
+    no_more_arguments(L, 3);
+    int which = -1;
+    for (int i = 0; i < 4; i++) {
+        int t = fl_opts_push(&o, shapes[i]);
+        if (t == LUA_TNIL) continue;
+        lua_pop(L, 1);
+        if (which >= 0)
+            return luaL_argerror(L, 2, lua_pushfstring(L, "give one region: %s or %s, not both",
+                                                       shapes[which], shapes[i]));
+        which = i;
+    }
+    if (which < 0) return luaL_argerror(L, 2, "no region: give sphere, box, vertices or where");
+    if (fl_opts_push(&o, "size") == LUA_TNIL)
+        return luaL_argerror(L, 2, "size: the element size inside the region is required");
+    lua_pop(L, 1);
+    double size = (double)fl_opts_number(&o, "size", 0.0);
+    if (!(size >= 0.0) || !(size < HUGE_VAL))
+        return fl_opts_error(&o, "size", "must be a finite number >= 0");
+    double grading = 1.5;
+    int gt = fl_opts_push(&o, "grading");
+    if (gt == LUA_TBOOLEAN) {
+        if (lua_toboolean(L, -1)) return fl_opts_error(&o, "grading", "number >= 1 or false expected, got true");
+        grading = INFINITY;
+        lua_pop(L, 1);
+    } else if (gt != LUA_TNIL) {
+        lua_pop(L, 1);
+        grading = (double)fl_opts_number(&o, "grading", 1.5);
+        if (!(grading >= 1.0)) return fl_opts_error(&o, "grading", "must be a number >= 1 (or false)");
+    }
+    femlod_region region;
+    memset(&region, 0, sizeof region);
+    const femlod_hierarchy *x = h->hier;
+    size_t nn = femlod_hierarchy_node_count(x), nv = femlod_hierarchy_input_vertices(x);
+    fl_opts_push(&o, shapes[which]);
+    int t = lua_gettop(L);
+    if (which == 0) {
+        if (!lua_istable(L, t)) return fl_opts_error(&o, "sphere", "table {center = {x, y, z}, radius = r} expected");
+        region_keys(L, &o, "sphere", t, "center", "radius");
+        region.kind = FEMLOD_REGION_SPHERE;
+        region_point(L, &o, "sphere", t, "center", region.center);
+        int isnum = 0;
+        lua_getfield(L, t, "radius");
+        region.radius = (double)lua_tonumberx(L, -1, &isnum);
+        if (lua_type(L, -1) != LUA_TNUMBER || !isnum || !(region.radius >= 0.0) ||
+            !(region.radius < HUGE_VAL))
+            return fl_opts_error(&o, "sphere", "radius: finite number >= 0 expected");
+        lua_pop(L, 1);
+    } else if (which == 1) {
+        if (!lua_istable(L, t)) return fl_opts_error(&o, "box", "table {min = {x, y, z}, max = {x, y, z}} expected");
+        region_keys(L, &o, "box", t, "max", "min");
+        region.kind = FEMLOD_REGION_BOX;
+        region_point(L, &o, "box", t, "min", region.min);
+        region_point(L, &o, "box", t, "max", region.max);
+        for (int k = 0; k < 3; k++)
+            if (region.min[k] > region.max[k])
+                return fl_opts_error(&o, "box", lua_pushfstring(L, "min[%d] > max[%d]", k + 1, k + 1));
+    } else if (which == 2) {
+        if (!lua_istable(L, t)) return fl_opts_error(&o, "vertices", "list of input vertex indices expected");
+        lua_Integer len = luaL_len(L, t);
+        unsigned char *marks = (unsigned char *)lua_newuserdatauv(L, nv ? nv : 1, 0);
+        memset(marks, 0, nv ? nv : 1);
+        for (lua_Integer i = 1; i <= len; i++) {
+            int isint = 0;
+            lua_geti(L, t, i);
+            lua_Integer v = lua_tointegerx(L, -1, &isint);
+            if (lua_type(L, -1) != LUA_TNUMBER || !isint)
+                return fl_opts_error(&o, "vertices", lua_pushfstring(L, "[%I]: integer expected, got %s", i, luaL_typename(L, -1)));
+            if (v < 1 || (lua_Unsigned)v > nv)
+                return fl_opts_error(&o, "vertices", lua_pushfstring(L, "[%I]: %I is not an input vertex (1..%I)", i, v, (lua_Integer)nv));
+            marks[v - 1] = 1;
+            lua_pop(L, 1);
+        }
+        region.kind = FEMLOD_REGION_VERTICES;
+        region.marks = marks;
+    } else {
+        if (!lua_isfunction(L, t)) return fl_opts_error(&o, "where", lua_pushfstring(L, "function expected, got %s", luaL_typename(L, t)));
+        unsigned char *marks = (unsigned char *)lua_newuserdatauv(L, nn ? nn : 1, 0);
+        luaL_checkstack(L, 5, NULL);
+        h->busy = 1; /* the function may not use or close the hierarchy */
+        for (size_t id = 0; id < nn; id++) {
+            femlod_node_info n;
+            femlod_hierarchy_node(x, (uint32_t)id, &n);
+            lua_pushvalue(L, t);
+            lua_pushnumber(L, n.position[0]);
+            lua_pushnumber(L, n.position[1]);
+            lua_pushnumber(L, n.position[2]);
+            /* protected, so that busy is cleared on an error */
+            if (lua_pcall(L, 3, 1, 0) != LUA_OK) {
+                h->busy = 0;
+                return lua_error(L);
+            }
+            int r = lua_type(L, -1);
+            if (r != LUA_TBOOLEAN && r != LUA_TNIL) {
+                h->busy = 0;
+                return fl_opts_error(&o, "where", lua_pushfstring(L, "function returned %s for node %I (boolean or nil expected)", luaL_typename(L, -1), lid((uint32_t)id)));
+            }
+            marks[id] = (unsigned char)lua_toboolean(L, -1);
+            lua_pop(L, 1);
+        }
+        h->busy = 0;
+        region.kind = FEMLOD_REGION_NODES;
+        region.marks = marks;
+    }
+    size_t ops = 0, inside = 0;
+    femlod_error err;
+    if (femlod_hierarchy_refine_region(h->hier, &region, size, grading, &ops, &inside, &err) !=
+        FEMLOD_OK)
+        return fl_lua_raise(L, &err);
+    lua_pushinteger(L, (lua_Integer)ops);
+    lua_pushinteger(L, (lua_Integer)inside);
+    return 2;
+}
+
 static int hierarchy_node(lua_State *L) {
     fl_hierarchy *h = fl_lhierarchy_check(L, 1);
     no_more_arguments(L, 3);
@@ -1036,6 +1202,7 @@ static const luaL_Reg hierarchy_methods[] = {
     {"coarsen", hierarchy_coarsen},
     {"rescale", hierarchy_rescale},
     {"refine_curvature", hierarchy_refine_curvature},
+    {"refine_region", hierarchy_refine_region},
     {"split", hierarchy_split},
     {"collapse", hierarchy_collapse},
     {"counts", hierarchy_counts},

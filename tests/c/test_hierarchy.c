@@ -387,6 +387,146 @@ static void test_refine_ball(void) {
     femlod_mesh_free(in);
 }
 
+/* Region LOD (5.3.1b): after refine_region every front node inside the
+ * region is an input vertex or has e_size <= size; a front node of before
+ * that lies beyond the reach of the graded thresholds, plus a margin of 12
+ * coarse elements for the splits the hierarchy's dependencies force (a
+ * fine region needs the transition zone that surrounded it during the
+ * simplification; measured up to 9.1 e_size on cover.obj with a sharp
+ * border, docs/algorithms.md), is still on the front; the thresholds of
+ * the simplification still hold. */
+static void test_region_case(const char *label, femlod_hierarchy *h, const femlod_region *r,
+                             double size, double grading, const femlod_topology *top,
+                             const femlod_mesh *in, double min_stretch, double max_size,
+                             int expect_far) {
+    size_t nn = femlod_hierarchy_node_count(h), nfront = 0;
+    double *d = calloc(nn, sizeof(double));
+    uint8_t *was_front = calloc(nn, 1);
+    CHECK(femlod_hierarchy_region_distance(h, r, d, NULL) == FEMLOD_OK);
+    const uint32_t *front = femlod_hierarchy_front(h, &nfront);
+    double emax = 0.0;
+    for (size_t p = 0; p < nfront; p++) {
+        femlod_node_info n;
+        femlod_hierarchy_node(h, front[p], &n);
+        emax = fmax(emax, n.e_size);
+        was_front[front[p]] = 1;
+    }
+    size_t before = femlod_hierarchy_front_triangles(h), ops = 0, inside = 0;
+    CHECK(femlod_hierarchy_refine_region(h, r, size, grading, &ops, &inside, NULL) == FEMLOD_OK);
+    CHECK(inside > 0);
+    /* reach: where size + (grading - 1) d >= every e_size of the front */
+    double reach = isinf(grading) ? 0.0 : (emax - size) / (grading - 1.0);
+    size_t bad_inside = 0, changed_far = 0, n_inside = 0, far_before = 0;
+    double changed_max = 0.0;
+    front = femlod_hierarchy_front(h, &nfront);
+    uint8_t *is_front = calloc(nn, 1);
+    for (size_t p = 0; p < nfront; p++) {
+        femlod_node_info n;
+        femlod_hierarchy_node(h, front[p], &n);
+        is_front[front[p]] = 1;
+        if (d[front[p]] == 0.0) {
+            n_inside++;
+            if (n.child[0] != UINT32_MAX && n.e_size > size) bad_inside++;
+        }
+    }
+    for (size_t x = 0; x < nn; x++) far_before += was_front[x] && d[x] > reach + 12.0 * emax;
+    for (size_t x = 0; x < nn; x++)
+        if (was_front[x] && !is_front[x]) {
+            changed_max = fmax(changed_max, d[x] - reach);
+            if (d[x] > reach + 12.0 * emax) changed_far++;
+        }
+    printf("region %s: size %g grading %g: %zu splits, %zu -> %zu triangles, %zu front nodes "
+           "inside (%zu nodes at distance 0), changed front nodes reach %.4g past the graded "
+           "reach %.4g (e_size max %.4g); far: %zu of %zu changed\n",
+           label, size, grading, ops, before, femlod_hierarchy_front_triangles(h), n_inside, inside,
+           changed_max, reach, emax, changed_far, far_before);
+    CHECK(ops > 0);
+    CHECK(n_inside > 0);
+    CHECK(bad_inside == 0);
+    CHECK(changed_far == 0);
+    CHECK(!expect_far || far_before > 0); /* else the check above tested nothing */
+    check_front(h, top, min_stretch, max_size, in);
+    free(is_front);
+    free(was_front);
+    free(d);
+}
+
+static void test_refine_region(const char *name, size_t target, int heavy) {
+    femlod_mesh *in = load(name), *out = NULL;
+    femlod_collapse_log *log = NULL;
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = target;
+    femlod_hierarchy *h = NULL;
+    femlod_simplify_result res;
+    CHECK(femlod_simplify(&out, &log, in, &o, &res, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_create(&h, in, log, NULL) == FEMLOD_OK);
+    femlod_topology top;
+    CHECK(femlod_mesh_topology(in, &top, NULL) == FEMLOD_OK);
+    femlod_quality q;
+    CHECK(femlod_mesh_quality(in, &q, NULL) == FEMLOD_OK);
+    double diag = sqrt(pow(q.bbox_max[0] - q.bbox_min[0], 2) + pow(q.bbox_max[1] - q.bbox_min[1], 2) +
+                       pow(q.bbox_max[2] - q.bbox_min[2], 2));
+    /* the thresholds the defaults chose */
+    double min_stretch = res.min_stretch > 0 ? res.min_stretch : 0.0;
+    double max_size = res.max_size > 0 ? res.max_size : INFINITY;
+    femlod_region r;
+    memset(&r, 0, sizeof r);
+    const double *p = femlod_mesh_positions(in);
+    /* a sphere around input vertex 0, sharp border */
+    r.kind = FEMLOD_REGION_SPHERE;
+    for (int k = 0; k < 3; k++) r.center[k] = p[k];
+    r.radius = 0.08 * diag;
+    test_region_case("sphere", h, &r, 0.0, INFINITY, &top, in, min_stretch, max_size, heavy);
+    /* a box around a vertex at the other end of the list, graded */
+    r.kind = FEMLOD_REGION_BOX;
+    size_t nv = femlod_mesh_vertex_count(in);
+    for (int k = 0; k < 3; k++) {
+        r.min[k] = p[3 * (nv - 1) + (size_t)k] - 0.04 * diag;
+        r.max[k] = p[3 * (nv - 1) + (size_t)k] + 0.04 * diag;
+    }
+    test_region_case("box", h, &r, 0.002 * diag, 1.5, &top, in, min_stretch, max_size, heavy);
+    /* 40 marked input vertices, graded */
+    unsigned char *marks = calloc(nv, 1);
+    for (size_t v = nv / 2; v < nv && v < nv / 2 + 40; v++) marks[v] = 1;
+    r.kind = FEMLOD_REGION_VERTICES;
+    r.marks = marks;
+    test_region_case("vertices", h, &r, 0.0, heavy ? 1.3 : 2.0, &top, in, min_stretch, max_size,
+                     0);
+    /* errors: nothing changes */
+    size_t before = femlod_hierarchy_front_triangles(h), ops = 7;
+    femlod_error err;
+    CHECK(femlod_hierarchy_refine_region(h, &r, -1.0, 1.5, &ops, NULL, &err) == FEMLOD_EINPUT);
+    CHECK_STR_HAS(err.message, "size is -1");
+    CHECK(ops == 0);
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, 0.5, NULL, NULL, &err) == FEMLOD_EINPUT);
+    CHECK_STR_HAS(err.message, "grading is 0.5");
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, NAN, NULL, NULL, &err) == FEMLOD_EINPUT);
+    r.marks = NULL;
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, 1.5, NULL, NULL, &err) == FEMLOD_EINPUT);
+    CHECK_STR_HAS(err.message, "marks are NULL");
+    r.kind = FEMLOD_REGION_BOX;
+    r.min[1] = r.max[1] + 1.0;
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, 1.5, NULL, NULL, &err) == FEMLOD_EINPUT);
+    CHECK_STR_HAS(err.message, "min <= max expected");
+    r.kind = FEMLOD_REGION_SPHERE;
+    r.radius = NAN;
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, 1.5, NULL, NULL, &err) == FEMLOD_EINPUT);
+    CHECK_STR_HAS(err.message, "radius is nan");
+    CHECK(femlod_hierarchy_front_triangles(h) == before);
+    /* a region no vertex reaches: nothing inside, nothing split */
+    r.kind = FEMLOD_REGION_SPHERE;
+    r.center[0] = q.bbox_max[0] + 10 * diag;
+    r.radius = 0.01 * diag;
+    size_t inside = 9;
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.0, INFINITY, &ops, &inside, NULL) == FEMLOD_OK);
+    CHECK(ops == 0 && inside == 0);
+    free(marks);
+    femlod_hierarchy_free(h);
+    femlod_collapse_log_free(log);
+    femlod_mesh_free(out);
+    femlod_mesh_free(in);
+}
+
 /* Mean element size per region (an n x n x n grid over the bounding box,
  * by centroid); regions without triangles get -1. */
 static void region_sizes(const femlod_mesh *m, const double lo[3], const double hi[3], int n,
@@ -582,6 +722,7 @@ int main(void) {
     test_checker();
     test_refine_ball();
     test_curvature_lod();
+    test_refine_region("fandisk.obj", 1500, 0);
     /* fandisk at 1,500 triangles is mostly at its coarsest, where a rescale
      * down cannot keep the density: its correlations are printed, the
      * count is asserted (docs/algorithms.md, 5.3.2) */
@@ -593,6 +734,7 @@ int main(void) {
         run("cover.obj", 6000, 10000, 7u);
         run("bunny.obj", 3000, 2000, 11u);
         test_rescale("cover.obj", 6000, 1, 4, 1);
+        test_refine_region("cover.obj", 6000, 1);
     }
     printf("self-intersecting pairs over all checked fronts: %zu\n", front_intersections);
     return check_report("hierarchy");

@@ -797,6 +797,95 @@ do
 end
 -- }======
 
+-- {====== refine_region: region LOD (paper 5.3.1b)
+do
+  local h <close> = fandisk:simplify { target = 1500 }
+  local base = h:counts().triangles
+  local c = fandisk:positions()[1]
+  local function inside_nodes(test)
+    local fine, n = true, 0
+    for _, id in ipairs(h:front()) do
+      local node = h:node(id)
+      if test(node.position[1], node.position[2], node.position[3]) then
+        n = n + 1
+        if node.children and node.e_size > 0.01 then fine = false end
+      end
+    end
+    return n, fine
+  end
+  local r = 0.1
+  local function in_sphere(x, y, z) return (x - c[1]) ^ 2 + (y - c[2]) ^ 2 + (z - c[3]) ^ 2 <= r * r end
+  local splits, inside = h:refine_region { sphere = { center = c, radius = r }, size = 0.01 }
+  T.check(splits > 0 and inside > 0, "sphere: splits and nodes inside")
+  local n, fine = inside_nodes(in_sphere)
+  T.check(n > 0 and fine, "sphere: every front node inside has e_size <= 0.01 or is a vertex")
+  T.eq(h:validate(), true, "valid after refine_region")
+  local after = h:counts().triangles
+  T.check(after > base, "sphere: more triangles")
+  -- the same region again: nothing left to do
+  T.eq((h:refine_region { sphere = { center = c, radius = r }, size = 0.01 }), 0, "idempotent")
+  -- where: the same sphere as a function gives the same front from the start
+  local g <close> = fandisk:simplify { target = 1500 }
+  g:refine_region { where = in_sphere, size = 0.01 }
+  local n2, fine2 = 0, true
+  for _, id in ipairs(g:front()) do
+    local node = g:node(id)
+    if in_sphere(node.position[1], node.position[2], node.position[3]) then
+      n2 = n2 + 1
+      if node.children and node.e_size > 0.01 then fine2 = false end
+    end
+  end
+  T.check(n2 > 0 and fine2, "where: every front node inside is fine")
+  -- box, vertices, grading false
+  local b <close> = fandisk:simplify { target = 1500 }
+  local s1 = b:refine_region { box = { min = { c[1] - r, c[2] - r, c[3] - r }, max = { c[1] + r, c[2] + r, c[3] + r } },
+    size = 0, grading = false }
+  T.check(s1 > 0, "box: splits")
+  local s2, in2 = b:refine_region { vertices = { 100, 200, 300 }, size = 0 }
+  T.check(s2 > 0 and in2 >= 3, "vertices: splits, the 3 leaves inside")
+  for _, v in ipairs { 100, 200, 300 } do
+    T.eq(b:node(v).state, "front", "vertices: input vertex " .. v .. " is on the front")
+  end
+  -- a sharp border refines less than a graded one
+  local sharp <close> = fandisk:simplify { target = 1500 }
+  sharp:refine_region { sphere = { center = c, radius = r }, size = 0.01, grading = false }
+  T.check(sharp:counts().triangles < after, "grading = false: fewer triangles than the default grading")
+  local env = { h = h, c = c }
+  local pre = "code:1: bad argument #1 to 'refine_region' ("
+  T.errmsg(pre .. "no region: give sphere, box, vertices or where)", "h:refine_region{ size = 1 }", env)
+  T.errmsg(pre .. "give one region: sphere or box, not both)",
+    "h:refine_region{ sphere = { center = c, radius = 1 }, box = {}, size = 1 }", env)
+  T.errmsg(pre .. "size: the element size inside the region is required)",
+    "h:refine_region{ sphere = { center = c, radius = 1 } }", env)
+  T.errmsg(pre .. "size: must be a finite number >= 0)",
+    "h:refine_region{ sphere = { center = c, radius = 1 }, size = -1 }", env)
+  T.errmsg(pre .. "grading: must be a number >= 1 (or false))",
+    "h:refine_region{ sphere = { center = c, radius = 1 }, size = 1, grading = 0.5 }", env)
+  T.errmsg(pre .. "grading: number >= 1 or false expected, got true)",
+    "h:refine_region{ sphere = { center = c, radius = 1 }, size = 1, grading = true }", env)
+  T.errmsg(pre .. "sphere: center: {x, y, z} expected, got nil)",
+    "h:refine_region{ sphere = { radius = 1 }, size = 1 }", env)
+  T.errmsg(pre .. "sphere: unknown key 'centre'; valid keys: center, radius)",
+    "h:refine_region{ sphere = { centre = c, radius = 1 }, size = 1 }", env)
+  T.errmsg(pre .. "sphere: radius: finite number >= 0 expected)",
+    "h:refine_region{ sphere = { center = c, radius = -1 }, size = 1 }", env)
+  T.errmsg(pre .. "sphere: center[2]: finite number expected)",
+    "h:refine_region{ sphere = { center = { 1, 'a', 3 }, radius = 1 }, size = 1 }", env)
+  T.errmsg(pre .. "box: min[2] > max[2])",
+    "h:refine_region{ box = { min = { 0, 1, 0 }, max = { 1, 0, 1 } }, size = 1 }", env)
+  T.errmsg(pre .. "vertices: [2]: 0 is not an input vertex (1..6475))",
+    "h:refine_region{ vertices = { 1, 0 }, size = 1 }", env)
+  T.errmsg(pre .. "vertices: [1]: integer expected, got string)",
+    "h:refine_region{ vertices = { 'x' }, size = 1 }", env)
+  T.errmsg(pre .. "where: function returned number for node 1 (boolean or nil expected))",
+    "h:refine_region{ where = function() return 1 end, size = 1 }", env)
+  T.errmsg("code:1: boom", "h:refine_region{ where = function() error('boom') end, size = 1 }", env)
+  T.errmsg("code:1: attempt to use a femlod.Hierarchy inside its own size function",
+    "h:refine_region{ where = function() h:counts() end, size = 1 }", env)
+  T.eq(h:validate(), true, "still valid after the errors")
+end
+-- }======
+
 -- {====== refine_curvature: curvature LOD (paper 5.3.1a)
 do
   local h = fandisk:simplify { target = 2000 }
