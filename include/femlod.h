@@ -595,18 +595,39 @@ femlod_status femlod_hierarchy_set_curvature(femlod_hierarchy *h,
  * stops the operation with FEMLOD_ECANCELLED, leaving a valid front. */
 typedef double (*femlod_kappa_map_fn)(void *payload, double kappa);
 
-/* Refines (femlod_hierarchy_refine) with T_S from each node's kappa. With
- * map NULL the map is linear: with K the `percentile` (in (0, 1]; NaN: 0.95)
- * of the leaves' kappa, kappa >= K gives `fine` (NaN: 0, input elements
- * there), kappa = 0 gives `coarse` (NaN: the largest e_size of the current
- * front, so flat regions stay as they are), and T_S = coarse + (fine -
- * coarse) kappa / K in between. With map, T_S = map(payload, kappa) and
- * fine, coarse and percentile are unused. FEMLOD_EINPUT "no curvature: call
+/* How refine_curvature maps kappa to T_S. With K the `percentile` of the
+ * leaves' kappa: kappa >= K gives `fine`, kappa = 0 gives `coarse`, and in
+ * between T_S = coarse + (fine - coarse) t with
+ *   LINEAR: t = kappa / K;
+ *   LOG:    t = log(1 + kappa / M) / log(1 + K / M), M the median of the
+ *           leaves' positive kappa (linear when there is none), which
+ *           refines moderately curved regions (fillets, holes) more than
+ *           LINEAR when creases put K far above the typical curvature. */
+typedef enum femlod_kappa_map_kind {
+    FEMLOD_KAPPA_LINEAR = 0,
+    FEMLOD_KAPPA_LOG = 1
+} femlod_kappa_map_kind;
+
+typedef struct femlod_curvature_lod_options {
+    double fine;       /* length; NaN: 0 (input elements where kappa >= K) */
+    double coarse;     /* length; NaN: the largest e_size of the current front (flat regions stay) */
+    double percentile; /* in (0, 1]; NaN: 0.95 */
+    femlod_kappa_map_kind map;
+    femlod_kappa_map_fn fn; /* when not NULL: T_S = fn(payload, kappa), the four above unused */
+    void *payload;
+} femlod_curvature_lod_options;
+#define FEMLOD_CURVATURE_LOD_OPTIONS_INIT \
+    {__builtin_nan(""), __builtin_nan(""), __builtin_nan(""), FEMLOD_KAPPA_LINEAR, NULL, NULL}
+
+/* Refines (femlod_hierarchy_refine) with T_S from each node's kappa, as the
+ * options say (NULL: the defaults). FEMLOD_EINPUT "no curvature: call
  * femlod_hierarchy_set_curvature first" when no curvature was set, or on a
- * negative or non-finite fine or coarse. *ops gets the splits done. */
-femlod_status femlod_hierarchy_refine_curvature(femlod_hierarchy *h, double fine, double coarse,
-                                                double percentile, femlod_kappa_map_fn map,
-                                                void *payload, size_t *ops, femlod_error *err);
+ * negative or non-finite fine or coarse, or a percentile outside (0, 1].
+ * A NaN from fn stops with FEMLOD_ECANCELLED, the front still valid. *ops
+ * gets the splits done. */
+femlod_status femlod_hierarchy_refine_curvature(femlod_hierarchy *h,
+                                                const femlod_curvature_lod_options *options,
+                                                size_t *ops, femlod_error *err);
 
 /* Region LOD (paper 5.3.1b). A region is a sphere or a box (tested on node
  * positions), or marks: one byte per node (FEMLOD_REGION_NODES, node_count

@@ -219,6 +219,8 @@ femlod_status femlod_hierarchy_set_curvature(femlod_hierarchy *h, const double *
 typedef struct kappa_size {
     const femlod_hierarchy *h;
     double fine, coarse, top; /* top: the percentile of the leaves' kappa */
+    double mid;               /* log map: the median of the leaves' positive kappa */
+    femlod_kappa_map_kind kind;
     femlod_kappa_map_fn map;
     void *payload;
 } kappa_size;
@@ -229,7 +231,13 @@ static double kappa_threshold(void *payload, const femlod_node_info *node) {
     if (ks->map) return ks->map(ks->payload, k);
     if (!(k > 0.0)) return ks->coarse;
     if (k >= ks->top) return ks->fine;
-    return ks->coarse + (ks->fine - ks->coarse) * (k / ks->top);
+    double t = k / ks->top;
+    /* log: linear in log(1 + kappa / mid), so that the decades of
+     * curvature below the top share the range of sizes instead of the
+     * crease-dominated top taking it all */
+    if (ks->kind == FEMLOD_KAPPA_LOG && ks->mid > 0.0)
+        t = log1p(k / ks->mid) / log1p(ks->top / ks->mid);
+    return ks->coarse + (ks->fine - ks->coarse) * t;
 }
 
 static int cmp_double(const void *a, const void *b) {
@@ -237,14 +245,19 @@ static int cmp_double(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
-femlod_status femlod_hierarchy_refine_curvature(femlod_hierarchy *h, double fine, double coarse,
-                                                double percentile, femlod_kappa_map_fn map,
-                                                void *payload, size_t *ops, femlod_error *err) {
+femlod_status femlod_hierarchy_refine_curvature(femlod_hierarchy *h,
+                                                const femlod_curvature_lod_options *options,
+                                                size_t *ops, femlod_error *err) {
     if (ops) *ops = 0;
+    femlod_curvature_lod_options o = FEMLOD_CURVATURE_LOD_OPTIONS_INIT;
+    if (options) o = *options;
     if (!h->kappa)
         return fl_error(err, FEMLOD_EINPUT, "no curvature: call femlod_hierarchy_set_curvature first");
-    kappa_size ks = {h, 0.0, 0.0, 0.0, map, payload};
-    if (!map) {
+    if (o.map != FEMLOD_KAPPA_LINEAR && o.map != FEMLOD_KAPPA_LOG)
+        return fl_error(err, FEMLOD_EINPUT, "unknown kappa map %d", (int)o.map);
+    kappa_size ks = {h, 0.0, 0.0, 0.0, 0.0, o.map, o.fn, o.payload};
+    if (!o.fn) {
+        double fine = o.fine, coarse = o.coarse, percentile = o.percentile;
         if (isnan(fine)) fine = 0.0;
         if (isnan(percentile)) percentile = 0.95;
         if (isnan(coarse)) {
@@ -268,6 +281,9 @@ femlod_status femlod_hierarchy_refine_curvature(femlod_hierarchy *h, double fine
             /* nearest rank */
             size_t rank = (size_t)ceil(percentile * (double)h->nv);
             ks.top = sorted[rank > 0 ? rank - 1 : 0];
+            size_t zero = 0;
+            while (zero < h->nv && !(sorted[zero] > 0.0)) zero++;
+            if (zero < h->nv) ks.mid = sorted[zero + (h->nv - zero - 1) / 2];
             free(sorted);
         }
         ks.fine = fine;

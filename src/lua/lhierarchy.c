@@ -838,18 +838,22 @@ static int hierarchy_refine_curvature(lua_State *L) {
     fl_opts_open(&o, L, 2, keys);
     no_more_arguments(L, 3);
     kappa_call kc = {L, 0, SIZE_OK, NULL, 0.0, 0.0};
+    femlod_curvature_lod_options co = FEMLOD_CURVATURE_LOD_OPTIONS_INIT;
     int mt = fl_opts_push(&o, "map");
     if (mt == LUA_TFUNCTION) {
         kc.fn = lua_gettop(L); /* stays on the stack for the calls */
     } else if (mt != LUA_TNIL) {
         if (mt != LUA_TSTRING)
-            return fl_opts_error(&o, "map", lua_pushfstring(L, "'linear' or function expected, "
-                                                               "got %s",
+            return fl_opts_error(&o, "map", lua_pushfstring(L, "'linear', 'log' or function "
+                                                               "expected, got %s",
                                                             lua_typename(L, mt)));
-        if (strcmp(lua_tostring(L, -1), "linear") != 0)
-            return fl_opts_error(&o, "map", lua_pushfstring(L, "'linear' or function expected, "
-                                                               "got '%s'",
-                                                            lua_tostring(L, -1)));
+        const char *name = lua_tostring(L, -1);
+        if (strcmp(name, "log") == 0)
+            co.map = FEMLOD_KAPPA_LOG;
+        else if (strcmp(name, "linear") != 0)
+            return fl_opts_error(&o, "map", lua_pushfstring(L, "'linear', 'log' or function "
+                                                               "expected, got '%s'",
+                                                            name));
         lua_pop(L, 1);
     }
     double fine = NAN, coarse = NAN, percentile = NAN;
@@ -888,9 +892,12 @@ static int hierarchy_refine_curvature(lua_State *L) {
     size_t ops = 0;
     femlod_error err;
     h->busy = 1;
-    femlod_status st = femlod_hierarchy_refine_curvature(h->hier, fine, coarse, percentile,
-                                                         kc.fn ? call_kappa_map : NULL, &kc, &ops,
-                                                         &err);
+    co.fine = fine;
+    co.coarse = coarse;
+    co.percentile = percentile;
+    co.fn = kc.fn ? call_kappa_map : NULL;
+    co.payload = &kc;
+    femlod_status st = femlod_hierarchy_refine_curvature(h->hier, &co, &ops, &err);
     h->busy = 0;
     if (kc.failed == SIZE_ERROR) return lua_error(L);
     if (kc.failed == SIZE_BAD_RESULT)

@@ -607,8 +607,8 @@ static void test_curvature_lod(void) {
     femlod_hierarchy *h = simplified(in, 1500, &out, &log);
     femlod_error err;
     size_t ops = 1;
-    CHECK(femlod_hierarchy_refine_curvature(h, NAN, NAN, NAN, NULL, NULL, &ops, &err) ==
-          FEMLOD_EINPUT);
+    femlod_curvature_lod_options co = FEMLOD_CURVATURE_LOD_OPTIONS_INIT;
+    CHECK(femlod_hierarchy_refine_curvature(h, NULL, &ops, &err) == FEMLOD_EINPUT);
     CHECK(strcmp(err.message, "no curvature: call femlod_hierarchy_set_curvature first") == 0);
     CHECK(ops == 0);
     CHECK(femlod_hierarchy_input_mesh(h, &im, NULL) == FEMLOD_OK);
@@ -621,21 +621,39 @@ static void test_curvature_lod(void) {
     CHECK(femlod_hierarchy_set_curvature(h, kappa, NULL) == FEMLOD_EINPUT);
     kappa[0] = 0.0;
     CHECK(femlod_hierarchy_set_curvature(h, kappa, NULL) == FEMLOD_OK);
-    CHECK(femlod_hierarchy_refine_curvature(h, NAN, NAN, NAN, nan_map, NULL, &ops, NULL) ==
-          FEMLOD_ECANCELLED);
+    co.fn = nan_map;
+    CHECK(femlod_hierarchy_refine_curvature(h, &co, &ops, NULL) == FEMLOD_ECANCELLED);
+    co.fn = NULL;
     CHECK(femlod_hierarchy_validate(h, NULL) == FEMLOD_OK);
-    CHECK(femlod_hierarchy_refine_curvature(h, -1.0, NAN, NAN, NULL, NULL, &ops, NULL) ==
-          FEMLOD_EINPUT);
+    co.fine = -1.0;
+    CHECK(femlod_hierarchy_refine_curvature(h, &co, &ops, NULL) == FEMLOD_EINPUT);
+    co.fine = NAN;
+    co.map = (femlod_kappa_map_kind)7;
+    CHECK(femlod_hierarchy_refine_curvature(h, &co, &ops, &err) == FEMLOD_EINPUT);
+    CHECK_STR_HAS(err.message, "unknown kappa map 7");
+    co.map = FEMLOD_KAPPA_LINEAR;
     size_t before = femlod_hierarchy_front_triangles(h);
-    CHECK(femlod_hierarchy_refine_curvature(h, NAN, NAN, NAN, NULL, NULL, &ops, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_refine_curvature(h, &co, &ops, NULL) == FEMLOD_OK);
     CHECK(ops > 0 && femlod_hierarchy_front_triangles(h) > before);
     CHECK(femlod_hierarchy_validate(h, NULL) == FEMLOD_OK);
     size_t after = femlod_hierarchy_front_triangles(h);
+    /* log: t_log >= t_linear below K (concave), so thresholds are smaller and
+     * the refine goes further */
+    CHECK(femlod_hierarchy_coarsen(h, INFINITY, NULL, NULL, &ops, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_front_triangles(h) == before);
+    co.map = FEMLOD_KAPPA_LOG;
+    CHECK(femlod_hierarchy_refine_curvature(h, &co, &ops, NULL) == FEMLOD_OK);
+    size_t after_log = femlod_hierarchy_front_triangles(h);
+    CHECK(after_log > after);
+    CHECK(femlod_hierarchy_validate(h, NULL) == FEMLOD_OK);
+    co.map = FEMLOD_KAPPA_LINEAR;
     /* fine = coarse = 0: every threshold is 0, the input mesh */
-    CHECK(femlod_hierarchy_refine_curvature(h, 0.0, 0.0, 1.0, NULL, NULL, &ops, NULL) ==
-          FEMLOD_OK);
+    co.fine = co.coarse = 0.0;
+    co.percentile = 1.0;
+    CHECK(femlod_hierarchy_refine_curvature(h, &co, &ops, NULL) == FEMLOD_OK);
     CHECK(femlod_hierarchy_front_triangles(h) == femlod_mesh_triangle_count(in));
-    printf("curvature LOD on fandisk -> 1500: %zu -> %zu triangles\n", before, after);
+    printf("curvature LOD on fandisk -> 1500: %zu -> %zu triangles (log map: %zu)\n", before, after,
+           after_log);
     free(kappa);
     femlod_mesh_free(im);
     femlod_hierarchy_free(h);

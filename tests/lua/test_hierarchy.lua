@@ -955,6 +955,16 @@ do
   -- fine = coarse = 0 everywhere with a map: the input mesh
   T.check(h:refine_curvature { map = function() return 0 end } > 0, "a map function")
   T.eq(h:counts().triangles, fandisk:counts().triangles, "map returning 0: the input's count")
+  -- map = "log" refines moderately curved parts more than the linear map
+  do
+    local a <close> = fandisk:simplify { target = 2000 }
+    local b <close> = fandisk:simplify { target = 2000 }
+    a:refine_curvature {}
+    b:refine_curvature { map = "log" }
+    T.check(b:counts().triangles > a:counts().triangles, "log map: more triangles than linear: "
+      .. b:counts().triangles .. " vs " .. a:counts().triangles)
+    T.eq(b:validate(), true, "valid after the log map")
+  end
   -- a map that raises: raised after the core returned, the front still valid
   local h2 = fandisk:simplify { target = 2000 }
   local env = { h = h2 }
@@ -964,9 +974,9 @@ do
     .. "(number expected))", "h:refine_curvature { map = function(k) return 'x' end }", env)
   T.errmsg("code:1: bad argument #1 to 'refine_curvature' (unknown key 'fien'; valid keys: coarse, fine, "
     .. "map, percentile, radius)", "h:refine_curvature { fien = 1 }", env)
-  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: 'linear' or function expected, got 'cubic')",
+  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: 'linear', 'log' or function expected, got 'cubic')",
     "h:refine_curvature { map = 'cubic' }", env)
-  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: 'linear' or function expected, got number)",
+  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: 'linear', 'log' or function expected, got number)",
     "h:refine_curvature { map = 3 }", env)
   T.errmsg("code:1: bad argument #1 to 'refine_curvature' (fine: must be a finite number >= 0)",
     "h:refine_curvature { fine = -1 }", env)
