@@ -114,6 +114,39 @@ double femlod_mesh_area(const femlod_mesh *mesh);
 femlod_status femlod_mesh_subdivide(femlod_mesh **out, const femlod_mesh *mesh, unsigned levels,
                                     femlod_error *err);
 
+/* Explicit repair, every change counted (docs/api.md, src/repair.c). The
+ * steps run in this order: weld vertices closer than `weld` (a length; 0:
+ * equal positions only; < 0: off) into the first of them in file order;
+ * drop degenerate triangles (a repeated vertex or stretch < 1e-6); drop
+ * duplicate triangles (same vertex set, either orientation; the first is
+ * kept); cut non-manifold edges and vertices (each vertex keeps one fan of
+ * triangles joined across two-triangle edges and gets a copy for every other
+ * fan); orient each component consistently (closed ones outwards, open ones
+ * flipping the fewer triangles); drop unused vertices. */
+typedef struct femlod_repair_options {
+    double weld;
+    int drop_degenerate, drop_duplicates, split_nonmanifold, orient, drop_unused;
+} femlod_repair_options;
+#define FEMLOD_REPAIR_OPTIONS_INIT {0.0, 1, 1, 1, 1, 1}
+
+typedef struct femlod_repair_report {
+    size_t vertices_in, triangles_in, vertices_out, triangles_out;
+    size_t welded;          /* vertices merged into an earlier one */
+    size_t degenerate;      /* triangles dropped */
+    size_t duplicates;      /* triangles dropped */
+    size_t split_vertices;  /* vertex copies made to cut non-manifold vertices */
+    size_t flipped;         /* triangles turned over */
+    size_t unorientable_edges; /* edges left inconsistent (a Moebius-like component) */
+    size_t unused;          /* vertices dropped for being in no triangle */
+    size_t nonmanifold_edges_left; /* edges the cut could not make manifold */
+} femlod_repair_report;
+
+/* Makes the repaired mesh in *out (the input is not changed); report (may
+ * be NULL) gets the counts. FEMLOD_EINPUT on a non-finite weld tolerance. */
+femlod_status femlod_mesh_repair(femlod_mesh **out, const femlod_mesh *mesh,
+                                 const femlod_repair_options *options,
+                                 femlod_repair_report *report, femlod_error *err);
+
 /* Connectivity facts, computed in time linear in the mesh size. */
 typedef struct femlod_topology {
     size_t edges;                 /* distinct undirected edges (degenerate triangles' a-a "edges" excluded) */
@@ -691,6 +724,11 @@ femlod_status femlod_hierarchy_save(const femlod_hierarchy *h, const char *path,
  * the file has none). */
 femlod_status femlod_hierarchy_load(femlod_hierarchy **out, const char *path,
                                     femlod_simplify_result *result, femlod_error *err);
+/* The same from size bytes in memory; name (may be NULL: "<memory>") stands
+ * for the path in messages. The bytes are not kept. */
+femlod_status femlod_hierarchy_load_memory(femlod_hierarchy **out, const void *data, size_t size,
+                                           const char *name, femlod_simplify_result *result,
+                                           femlod_error *err);
 
 /* Checks the invariant from scratch, in time linear in the hierarchy: the
  * front is a cut, the applied collapses are closed under vstars, and the

@@ -251,7 +251,18 @@ femlod_status femlod_hierarchy_load(femlod_hierarchy **out, const char *path,
     size_t size = 0;
     femlod_status st = fl_file_read_all(path, &data, &size, err);
     if (st != FEMLOD_OK) return st;
-    rstream r = {(const unsigned char *)data, size, 0, path, err, FEMLOD_OK};
+    st = femlod_hierarchy_load_memory(out, data, size, path, result, err);
+    free(data);
+    return st;
+}
+
+femlod_status femlod_hierarchy_load_memory(femlod_hierarchy **out, const void *bytes, size_t size,
+                                           const char *name, femlod_simplify_result *result,
+                                           femlod_error *err) {
+    const char *path = name ? name : "<memory>";
+    const unsigned char *data = (const unsigned char *)bytes;
+    femlod_status st = FEMLOD_OK;
+    rstream r = {data, size, 0, path, err, FEMLOD_OK};
     femlod_mesh *mesh = NULL;
     femlod_collapse_log *log = NULL;
     femlod_hierarchy *h = NULL;
@@ -421,7 +432,6 @@ parse_error:
 nomem:
     st = fl_error(err, FEMLOD_ENOMEM, "%s: out of memory", path);
 done:
-    free(data);
     free(front);
     free(vstars);
     free(meta);

@@ -18,6 +18,7 @@
 
 #include <limits.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -421,6 +422,59 @@ static int mesh_subdivide(lua_State *L) {
     return 1;
 }
 
+/* m:repair{ weld = 0 | tol | false, drop_degenerate = true, drop_duplicates =
+ * true, split_nonmanifold = true, orient = true, drop_unused = true }: a new,
+ * repaired mesh and a table counting every change (femlod_mesh_repair). */
+static int mesh_repair(lua_State *L) {
+    static const char *const keys[] = {"drop_degenerate", "drop_duplicates", "drop_unused",
+                                       "orient", "split_nonmanifold", "weld", NULL};
+    const femlod_mesh *m = fl_lmesh_check(L, 1);
+    fl_opts o;
+    fl_opts_open(&o, L, 2, keys);
+    femlod_repair_options ro = FEMLOD_REPAIR_OPTIONS_INIT;
+    int wt = fl_opts_push(&o, "weld");
+    if (wt == LUA_TBOOLEAN) {
+        ro.weld = lua_toboolean(L, -1) ? 0.0 : -1.0;
+        lua_pop(L, 1);
+    } else if (wt != LUA_TNIL) {
+        lua_pop(L, 1);
+        ro.weld = (double)fl_opts_number(&o, "weld", 0.0);
+        if (!(ro.weld >= 0.0) || !(ro.weld < HUGE_VAL))
+            return fl_opts_error(&o, "weld", "must be a finite length >= 0, or false");
+    }
+    ro.drop_degenerate = fl_opts_boolean(&o, "drop_degenerate", 1);
+    ro.drop_duplicates = fl_opts_boolean(&o, "drop_duplicates", 1);
+    ro.split_nonmanifold = fl_opts_boolean(&o, "split_nonmanifold", 1);
+    ro.orient = fl_opts_boolean(&o, "orient", 1);
+    ro.drop_unused = fl_opts_boolean(&o, "drop_unused", 1);
+    femlod_mesh **slot = fl_lmesh_box(L);
+    femlod_repair_report r;
+    femlod_error err;
+    if (femlod_mesh_repair(slot, m, &ro, &r, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    lua_createtable(L, 0, 12);
+    static const struct { const char *key; size_t off; } fields[] = {
+        {"vertices_in", offsetof(femlod_repair_report, vertices_in)},
+        {"triangles_in", offsetof(femlod_repair_report, triangles_in)},
+        {"vertices", offsetof(femlod_repair_report, vertices_out)},
+        {"triangles", offsetof(femlod_repair_report, triangles_out)},
+        {"welded", offsetof(femlod_repair_report, welded)},
+        {"degenerate", offsetof(femlod_repair_report, degenerate)},
+        {"duplicates", offsetof(femlod_repair_report, duplicates)},
+        {"split_vertices", offsetof(femlod_repair_report, split_vertices)},
+        {"flipped", offsetof(femlod_repair_report, flipped)},
+        {"unorientable_edges", offsetof(femlod_repair_report, unorientable_edges)},
+        {"unused", offsetof(femlod_repair_report, unused)},
+        {"nonmanifold_edges_left", offsetof(femlod_repair_report, nonmanifold_edges_left)},
+    };
+    for (size_t i = 0; i < sizeof fields / sizeof fields[0]; i++) {
+        size_t v;
+        memcpy(&v, (const char *)&r + fields[i].off, sizeof v);
+        lua_pushinteger(L, (lua_Integer)v);
+        lua_setfield(L, -2, fields[i].key);
+    }
+    return 2;
+}
+
 static int mesh_copy(lua_State *L) {
     const femlod_mesh *m = fl_lmesh_check(L, 1);
     femlod_mesh **slot = fl_lmesh_box(L);
@@ -547,6 +601,7 @@ static const luaL_Reg mesh_methods[] = {
     {"counts", mesh_counts},
     {"bbox", mesh_bbox},
     {"subdivide", mesh_subdivide},
+    {"repair", mesh_repair},
     {"copy", mesh_copy},
     {"positions", mesh_positions},
     {"triangles", mesh_triangles},

@@ -221,6 +221,36 @@ static void run(const char *name, size_t target, size_t random_ops, unsigned see
 
 /* Damaged files: every truncation point, flipped bytes, foreign data; each
  * gives FEMLOD_EPARSE (or EUNSUPPORTED for a version) and never a crash. */
+/* femlod_hierarchy_load_memory: the shipped small.flh loads and validates;
+ * every truncation of it fails with a message under the given name. */
+static void test_load_memory(void) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/small.flh", FEMLOD_TEST_DATA);
+    FILE *fp = fopen(path, "rb");
+    CHECK(fp != NULL);
+    if (!fp) return;
+    static unsigned char buf[1 << 16];
+    size_t n = fread(buf, 1, sizeof buf, fp);
+    fclose(fp);
+    femlod_hierarchy *h = NULL;
+    femlod_error err;
+    femlod_simplify_result res;
+    CHECK(femlod_hierarchy_load_memory(&h, buf, n, "small.flh", &res, &err) == FEMLOD_OK);
+    CHECK(h && femlod_hierarchy_validate(h, NULL) == FEMLOD_OK);
+    CHECK(h && femlod_hierarchy_front_triangles(h) == 102);
+    CHECK(res.triangles == 96);
+    femlod_hierarchy_free(h);
+    size_t failed = 0, named = 0;
+    for (size_t cut = 0; cut < n; cut += 7) {
+        h = NULL;
+        if (femlod_hierarchy_load_memory(&h, buf, cut, NULL, NULL, &err) == FEMLOD_EPARSE) failed++;
+        named += strncmp(err.message, "<memory>", 8) == 0;
+        CHECK(h == NULL);
+    }
+    CHECK(failed == (n + 6) / 7);
+    CHECK(named == failed);
+}
+
 static void test_damaged_files(void) {
     femlod_mesh *a = shape_icosphere(2), *out = NULL;
     femlod_collapse_log *log = NULL;
@@ -746,6 +776,7 @@ int main(void) {
      * count is asserted (docs/algorithms.md, 5.3.2) */
     test_rescale("fandisk.obj", 1500, 1, 3, 0);
     test_errors();
+    test_load_memory();
     test_damaged_files();
     run("fandisk.obj", 1500, 10000, 20261122u);
     if (is_heavy) {

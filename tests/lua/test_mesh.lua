@@ -339,4 +339,39 @@ collectgarbage()
 T.eq(fandisk:counts().vertices, 6475, "still usable after collection")
 -- }======
 
+-- {====== repair: explicit, every change counted
+do
+  local spider = femlod.load(P.shared .. "/spider_binary.stl")
+  local fixed, r = spider:repair()
+  T.eq(r.triangles_in, 1368, "repair: triangles in")
+  T.eq(r.degenerate, 56, "repair: spider's degenerate triangles dropped")
+  T.eq(r.triangles, fixed:counts().triangles, "repair: the report counts the new mesh")
+  local q = fixed:quality()
+  T.check(q.manifold and q.oriented and q.degenerate == 0, "repair: manifold, oriented, no degenerate")
+  T.eq(spider:counts().triangles, 1368, "repair leaves its input alone")
+  -- a soup: every corner its own vertex, welded back
+  local pos, tri = {}, {}
+  for i, t in ipairs(tet:triangles()) do
+    for k = 1, 3 do pos[#pos + 1] = tet:positions()[t[k]] end
+    tri[i] = { 3 * i - 2, 3 * i - 1, 3 * i }
+  end
+  local s = femlod.mesh { positions = pos, triangles = tri }
+  local w, rw = s:repair()
+  T.eq(rw.welded, 8, "repair: 12 corners welded into 4 vertices")
+  T.eq(w:counts().vertices, 4, "repair: 4 vertices")
+  T.check(w:quality().closed, "repair: the welded soup is closed")
+  local _, off = s:repair { weld = false }
+  T.eq(off.welded, 0, "weld = false: nothing welded")
+  local _, tol = s:repair { weld = 1e-9, orient = false, split_nonmanifold = false }
+  T.eq(tol.welded, 8, "weld = 1e-9")
+  local env = { s = s }
+  T.errmsg("code:1: bad argument #1 to 'repair' (unknown key 'wled'; valid keys: drop_degenerate, "
+    .. "drop_duplicates, drop_unused, orient, split_nonmanifold, weld)", "s:repair{ wled = 1 }", env)
+  T.errmsg("code:1: bad argument #1 to 'repair' (weld: must be a finite length >= 0, or false)",
+    "s:repair{ weld = -1 }", env)
+  T.errmsg("code:1: bad argument #1 to 'repair' (orient: boolean expected, got number)",
+    "s:repair{ orient = 1 }", env)
+end
+-- }======
+
 T.summary("test_mesh")
