@@ -134,4 +134,8 @@ function M.summary(name)
   if M.passed == 0 then error(name .. ": no check ran", 0) end
 end
 
+-- False under FEMLOD_TEST_HEAVY=0 (the sanitizer pass): tests skip their
+-- slow parts (whole example recipes on the cover) there.
+M.heavy = os.getenv("FEMLOD_TEST_HEAVY") ~= "0"
+
 return M
