@@ -24,9 +24,24 @@ static const struct {
     {FEMLOD_FORMAT_PLY_BINARY, "ply_binary"},
     {FEMLOD_FORMAT_GLTF, "gltf"},
     {FEMLOD_FORMAT_GLB, "glb"},
+    {FEMLOD_FORMAT_MSH, "msh"},
+    {FEMLOD_FORMAT_MSH2, "msh2"},
+    {FEMLOD_FORMAT_VTK, "vtk"},
+    {FEMLOD_FORMAT_INP, "inp"},
+    {FEMLOD_FORMAT_MEDIT, "medit"},
 };
 
-#define SUPPORTED_EXTENSIONS ".obj, .stl, .off, .ply, .gltf, .glb"
+#define FORMAT_COUNT (sizeof format_names / sizeof format_names[0])
+
+#define SUPPORTED_EXTENSIONS ".obj, .stl, .off, .ply, .gltf, .glb, .msh, .vtk, .inp, .mesh"
+
+const char *const *femlod_format_names(void) {
+    static const char *names[FORMAT_COUNT + 1];
+    /* Filled on every call (the same values each time): no first-call race. */
+    for (size_t i = 0; i < FORMAT_COUNT; i++) names[i] = format_names[i].name;
+    names[FORMAT_COUNT] = NULL;
+    return names;
+}
 
 const char *femlod_format_name(femlod_format format) {
     if (format == FEMLOD_FORMAT_AUTO) return "auto";
@@ -64,14 +79,18 @@ femlod_format femlod_format_from_path(const char *path) {
                {"off", FEMLOD_FORMAT_OFF},
                {"ply", FEMLOD_FORMAT_PLY},
                {"gltf", FEMLOD_FORMAT_GLTF},
-               {"glb", FEMLOD_FORMAT_GLB}};
+               {"glb", FEMLOD_FORMAT_GLB},
+               {"msh", FEMLOD_FORMAT_MSH},
+               {"vtk", FEMLOD_FORMAT_VTK},
+               {"inp", FEMLOD_FORMAT_INP},
+               {"mesh", FEMLOD_FORMAT_MEDIT}};
     for (size_t i = 0; i < sizeof ext / sizeof ext[0]; i++)
         if (equal_nocase(dot + 1, ext[i].ext)) return ext[i].format;
     return FEMLOD_FORMAT_AUTO;
 }
 
 static int format_valid(femlod_format f) {
-    return f >= FEMLOD_FORMAT_AUTO && f <= FEMLOD_FORMAT_GLB;
+    return f >= FEMLOD_FORMAT_AUTO && f <= FEMLOD_FORMAT_MEDIT;
 }
 
 /* }====== */
@@ -111,6 +130,15 @@ static femlod_status dispatch_read(femlod_mesh **out, const char *data, size_t s
     case FEMLOD_FORMAT_PLY_BINARY: return fl_read_ply(out, data, size, name, err);
     case FEMLOD_FORMAT_GLTF:
     case FEMLOD_FORMAT_GLB: return fl_read_gltf(out, data, size, name, file, f, err);
+    case FEMLOD_FORMAT_MSH:
+    case FEMLOD_FORMAT_MSH2: return fl_read_msh(out, data, size, name, err);
+    case FEMLOD_FORMAT_MEDIT: return fl_read_medit(out, data, size, name, err);
+    case FEMLOD_FORMAT_VTK:
+    case FEMLOD_FORMAT_INP:
+        return fl_error(err, FEMLOD_EUNSUPPORTED,
+                        "%s: femlod writes %s files but does not read them (formats read: obj, "
+                        "stl, off, ply, gltf, glb, msh, medit)",
+                        name, femlod_format_name(f));
     case FEMLOD_FORMAT_AUTO: break;
     }
     return fl_error(err, FEMLOD_EINPUT, "%s: no format", name);
@@ -160,24 +188,38 @@ femlod_status femlod_mesh_write(const femlod_mesh *mesh, const char *path,
     femlod_format f = resolve_format(options ? options->format : FEMLOD_FORMAT_AUTO, path, err);
     if (f == FEMLOD_FORMAT_AUTO) return err ? err->status : FEMLOD_EINPUT;
     int gltf = f == FEMLOD_FORMAT_GLTF || f == FEMLOD_FORMAT_GLB;
+    int fe = f == FEMLOD_FORMAT_MSH || f == FEMLOD_FORMAT_MSH2 || f == FEMLOD_FORMAT_VTK ||
+             f == FEMLOD_FORMAT_INP || f == FEMLOD_FORMAT_MEDIT;
     if (options && !gltf && (options->color_by || options->normals || options->extras))
         return fl_error(err, FEMLOD_EINPUT,
                         "%s: color_by, normals and extras are glTF options (format %s)", path,
                         femlod_format_name(f));
+    if (options && f != FEMLOD_FORMAT_INP &&
+        (options->node_set_count || options->element_set_count))
+        return fl_error(err, FEMLOD_EINPUT,
+                        "%s: node and element sets are written to .inp only (format %s)", path,
+                        femlod_format_name(f));
     fl_out o;
     femlod_status s = fl_out_open(&o, path, err);
     if (s != FEMLOD_OK) return s;
-    if (gltf) {
+    errno = 0;
+    if (gltf || fe) {
         /* "gltf" names the family, as "stl" does: GLB for a .glb name. */
         int binary = f == FEMLOD_FORMAT_GLB || femlod_format_from_path(path) == FEMLOD_FORMAT_GLB;
-        s = fl_write_gltf(mesh, o.fp, binary, options, path, err);
+        switch (f) {
+        case FEMLOD_FORMAT_MSH: s = fl_write_msh(mesh, o.fp, 4, path, err); break;
+        case FEMLOD_FORMAT_MSH2: s = fl_write_msh(mesh, o.fp, 2, path, err); break;
+        case FEMLOD_FORMAT_VTK: s = fl_write_vtk(mesh, o.fp, path, err); break;
+        case FEMLOD_FORMAT_INP: s = fl_write_inp(mesh, o.fp, options, path, err); break;
+        case FEMLOD_FORMAT_MEDIT: s = fl_write_medit(mesh, o.fp, path, err); break;
+        default: s = fl_write_gltf(mesh, o.fp, binary, options, path, err); break;
+        }
         if (s != FEMLOD_OK) {
             fl_out_abort(&o);
             return s;
         }
         return fl_out_commit(&o, err);
     }
-    errno = 0;
     switch (f) {
     case FEMLOD_FORMAT_OBJ: s = fl_write_obj(mesh, o.fp); break;
     case FEMLOD_FORMAT_STL:
@@ -187,9 +229,7 @@ femlod_status femlod_mesh_write(const femlod_mesh *mesh, const char *path,
     case FEMLOD_FORMAT_PLY:
     case FEMLOD_FORMAT_PLY_BINARY: s = fl_write_ply(mesh, o.fp, 1); break;
     case FEMLOD_FORMAT_PLY_ASCII: s = fl_write_ply(mesh, o.fp, 0); break;
-    case FEMLOD_FORMAT_GLTF:
-    case FEMLOD_FORMAT_GLB: /* written above */
-    case FEMLOD_FORMAT_AUTO: s = FEMLOD_EINPUT; break;
+    default: /* written above */ s = FEMLOD_EINPUT; break;
     }
     if (s != FEMLOD_OK) {
         int e = errno; /* fl_out_abort's fclose/unlink may change it */
@@ -238,6 +278,101 @@ int fl_io_coord(const char *s, size_t n, double *out, char *why, size_t why_size
     }
     *out = x;
     return 1;
+}
+
+/* }====== */
+
+/* {====== token reader and number output for the FE formats */
+
+void fl_text_init(fl_text *t, const char *data, size_t size, const char *name, char comment,
+                  femlod_error *err) {
+    if (size >= 3 && memcmp(data, "\xEF\xBB\xBF", 3) == 0) {
+        data += 3;
+        size -= 3;
+    }
+    t->p = t->start = data;
+    t->end = data + size;
+    t->name = name;
+    t->line = 1;
+    t->err = err;
+    t->eof = 0;
+    t->comment = comment;
+}
+
+static int text_space(char c) { return c == ' ' || (c >= '\t' && c <= '\r'); }
+
+const char *fl_text_next(fl_text *t, size_t *len) {
+    const char *p = t->p, *end = t->end;
+    for (;;) {
+        while (p < end && text_space(*p) && *p != '\n') p++;
+        if (p == end) break;
+        if (*p == '\n') {
+            t->line++;
+            p++;
+        } else if (t->comment && *p == t->comment) {
+            const char *nl = memchr(p, '\n', (size_t)(end - p));
+            p = nl ? nl : end;
+        } else {
+            const char *s = p;
+            while (p < end && !text_space(*p) && !(t->comment && *p == t->comment)) p++;
+            *len = (size_t)(p - s);
+            t->p = p;
+            return s;
+        }
+    }
+    /* Name the file's last line, not the empty one after its final newline. */
+    if (!t->eof && end > t->start && end[-1] == '\n') t->line--;
+    t->eof = 1;
+    t->p = end;
+    return NULL;
+}
+
+femlod_status fl_text_fail(fl_text *t, femlod_status st, const char *fmt, ...) {
+    char msg[FEMLOD_ERROR_MESSAGE_SIZE];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    return fl_error(t->err, st, "%s:%zu: %s", t->name, t->line, msg);
+}
+
+int fl_text_u64(const char *s, size_t n, uint64_t *v) {
+    if (n == 0) return 0;
+    uint64_t x = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (s[i] < '0' || s[i] > '9') return 0;
+        if (x < (UINT64_C(1) << 60)) x = x * 10 + (uint64_t)(s[i] - '0');
+    }
+    *v = x;
+    return 1;
+}
+
+int fl_text_is(const char *s, size_t n, const char *word) {
+    size_t k = strlen(word);
+    return n == k && memcmp(s, word, k) == 0;
+}
+
+femlod_status fl_io_write_error(const char *path, femlod_error *err) {
+    int e = errno;
+    return fl_error(err, FEMLOD_EIO, "%s: cannot write: %s", path, strerror(e ? e : EIO));
+}
+
+int fl_io_put_xyz(FILE *fp, const double *p, const char *sep, const char *end) {
+    char buf[160];
+    size_t n = 0, ls = strlen(sep), le = strlen(end);
+    if (ls > 8 || le > 8) return 0;
+    for (int k = 0; k < 3; k++) {
+        if (k) {
+            memcpy(buf + n, sep, ls);
+            n += ls;
+        }
+        int w = fl_format_double(buf + n, 32, p[k]);
+        if (w < 0) return 0;
+        n += (size_t)w;
+    }
+    memcpy(buf + n, end, le);
+    n += le;
+    return fwrite(buf, 1, n, fp) == n;
 }
 
 /* }====== */
