@@ -595,9 +595,8 @@ static double bin_f64(msh_reader *r) {
 static femlod_status bin_need(msh_reader *r, uint64_t count, uint64_t size, const char *what) {
     uint64_t total;
     if (__builtin_mul_overflow(count, size, &total) || total > bin_left(r))
-        return bin_fail(r, r->t.p, "%s: %llu of %llu bytes need %llu, only %zu are left", what,
-                        (unsigned long long)count, (unsigned long long)size,
-                        (unsigned long long)(total > bin_left(r) ? total : UINT64_MAX), bin_left(r));
+        return bin_fail(r, r->t.p, "%s: %llu records of %llu bytes, only %zu bytes are left", what,
+                        (unsigned long long)count, (unsigned long long)size, bin_left(r));
     return FEMLOD_OK;
 }
 

@@ -177,7 +177,7 @@ static void test_binary_big_endian(void) {
     /* The same file cut inside the nodes names the byte. */
     m = NULL;
     CHECK(femlod_mesh_read_memory(&m, buf, 60, "be.msh", &o, &err) == FEMLOD_EPARSE && !m);
-    CHECK_STR_HAS(err.message, "be.msh: byte 49: nodes: 3 of 28 bytes need 84, only 11 are left");
+    CHECK_STR_HAS(err.message, "be.msh: byte 49: nodes: 3 records of 28 bytes, only 11 bytes are left");
 }
 
 /* }====== */

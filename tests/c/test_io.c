@@ -785,6 +785,10 @@ static const bad_case bad_cases[] = {
      ":20: file ends before '$EndElements' (after 1 element blocks)"},
     {"msh_short_element.msh", FEMLOD_EPARSE,
      ":15: '$EndElements' inside an element (too few node tags)"},
+    {"msh_bin_truncated.msh", FEMLOD_EPARSE,
+     ": byte 2017: nodes: 14 records of 32 bytes, only 38 bytes are left"},
+    {"msh_bin_tag_undefined.msh", FEMLOD_EPARSE,
+     ": byte 1156: node tag 999 is not defined (14 nodes with tags 1..14)"},
     /* Medit */
     {"medit_after_end.mesh", FEMLOD_EPARSE, ":9: data after 'End': 'Vertices'"},
     {"medit_dim2.mesh", FEMLOD_EUNSUPPORTED, ":2: Dimension 2 (only 3 is read)"},
