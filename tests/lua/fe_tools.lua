@@ -1,7 +1,8 @@
 -- fe_tools.lua: what femlod writes, read by the real tools (issue 7's "done
 -- when"): the cover simplified to 6000 triangles (the paper's thresholds)
 -- is loaded by gmsh from .msh 4.1 and 2.2 with its exact node and element
--- counts and re-exported to a file femlod reads back; TetGen
+-- counts (and from .mesh and .vtk) and re-exported to a file femlod reads
+-- back; TetGen
 -- tetrahedralizes the closed .mesh surface keeping every surface triangle
 -- (-Y); CalculiX solves a static S3 shell analysis on the .inp with a fixed
 -- edge and a load given as nsets. A missing tool fails the test (CI installs
@@ -44,6 +45,7 @@ local ymin, ymax = box.min[2], box.max[2]
 cover:save(path("cover.msh"))
 cover:save(path("cover22.msh"), { format = "msh2" })
 cover:save(path("cover.mesh"))
+cover:save(path("cover.vtk"))
 local sets = {
   FIXED = function(_, y) return y == ymin end,   -- the side wall at y = 0: clamped
   LOADED = function(_, y) return y == ymax end,  -- the opposite wall: pushed down
@@ -67,6 +69,14 @@ if have("gmsh") then
     T.eq(code, 0, "gmsh -check " .. f)
     T.eq(tonumber(out:match("Info%s*: (%d+) nodes")), counts.vertices, f .. ": gmsh's node count")
     T.eq(tonumber(out:match("Info%s*: (%d+) elements")), 6000, f .. ": gmsh's element count")
+    T.check(not out:find("Warning") and not out:find("Error"), f .. ": gmsh has no warning: " .. out)
+  end
+  -- gmsh also reads the Medit and VTK files: the same 6000 triangles.
+  for _, f in ipairs { "cover.mesh", "cover.vtk" } do
+    local code, out = sh("gmsh -check " .. f)
+    T.eq(code, 0, "gmsh -check " .. f)
+    T.eq(tonumber(out:match("Checking mesh coherence %((%d+) elements%)")), 6000,
+      f .. ": gmsh's element count")
     T.check(not out:find("Warning") and not out:find("Error"), f .. ": gmsh has no warning: " .. out)
   end
   -- gmsh's own re-export (4.1 to 2.2) reads back to the same surface.
