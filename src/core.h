@@ -242,6 +242,11 @@ FL_INTERNAL femlod_status fl_write_inp(const femlod_mesh *m, FILE *fp,
                                        femlod_error *err);
 FL_INTERNAL femlod_status fl_write_medit(const femlod_mesh *m, FILE *fp, const char *path,
                                          femlod_error *err);
+/* The boundary edges (sides of exactly one triangle) as 2*count vertex
+ * indices, oriented as their triangle runs, in triangle order; caller frees.
+ * A triangle listing an edge twice (a, b, a) counts it as one side. */
+FL_INTERNAL femlod_status fl_io_boundary_sides(const femlod_mesh *m, uint32_t **sides,
+                                               size_t *count, femlod_error *err);
 /* Fills err with "PATH: cannot write: <strerror(errno), EIO when 0>". */
 FL_INTERNAL femlod_status fl_io_write_error(const char *path, femlod_error *err);
 /* Writes x y z with the shortest round-trip digits, separated by sep, then

@@ -352,6 +352,33 @@ int fl_text_is(const char *s, size_t n, const char *word) {
     return n == k && memcmp(s, word, k) == 0;
 }
 
+femlod_status fl_io_boundary_sides(const femlod_mesh *m, uint32_t **sides, size_t *count,
+                                   femlod_error *err) {
+    fl_adjacency adj;
+    femlod_status st = fl_adjacency_build(&adj, m->tri, m->nt, m->nv, err);
+    if (st != FEMLOD_OK) return st;
+    size_t n = 0;
+    for (size_t e = 0; e < adj.ne; e++) n += adj.edge_start[e + 1] - adj.edge_start[e] == 1;
+    uint32_t *out = fl_alloc(2 * n, sizeof *out);
+    if (!out) {
+        fl_adjacency_free(&adj);
+        return fl_error(err, FEMLOD_ENOMEM, "out of memory");
+    }
+    size_t k = 0;
+    for (size_t t = 0; t < m->nt; t++)
+        for (int c = 0; c < 3; c++) {
+            uint32_t e = adj.tri_edges[3 * t + (size_t)c];
+            if (e == UINT32_MAX || adj.edge_start[e + 1] - adj.edge_start[e] != 1) continue;
+            out[2 * k] = m->tri[3 * t + (size_t)c];
+            out[2 * k + 1] = m->tri[3 * t + (size_t)(c + 1) % 3];
+            k++;
+        }
+    fl_adjacency_free(&adj);
+    *sides = out;
+    *count = k;
+    return FEMLOD_OK;
+}
+
 femlod_status fl_io_write_error(const char *path, femlod_error *err) {
     int e = errno;
     return fl_error(err, FEMLOD_EIO, "%s: cannot write: %s", path, strerror(e ? e : EIO));
@@ -360,7 +387,7 @@ femlod_status fl_io_write_error(const char *path, femlod_error *err) {
 int fl_io_put_xyz(FILE *fp, const double *p, const char *sep, const char *end) {
     char buf[160];
     size_t n = 0, ls = strlen(sep), le = strlen(end);
-    if (ls > 8 || le > 8) return 0;
+    if (ls > 16 || le > 16) return 0;
     for (int k = 0; k < 3; k++) {
         if (k) {
             memcpy(buf + n, sep, ls);

@@ -98,24 +98,24 @@ static femlod_status put_set(FILE *fp, const char *keyword, const femlod_index_s
 /* The nodes of boundary edges, sorted (none when the surface is closed). */
 static femlod_status boundary_nodes(const femlod_mesh *m, uint32_t **out, size_t *count,
                                     femlod_error *err) {
-    fl_adjacency adj;
-    femlod_status st = fl_adjacency_build(&adj, m->tri, m->nt, m->nv, err);
+    uint32_t *sides;
+    size_t ns;
+    femlod_status st = fl_io_boundary_sides(m, &sides, &ns, err);
     if (st != FEMLOD_OK) return st;
     unsigned char *on = fl_calloc(m->nv, 1);
     uint32_t *ids = fl_alloc(m->nv, sizeof *ids);
     if (!on || !ids) {
         free(on);
         free(ids);
-        fl_adjacency_free(&adj);
+        free(sides);
         return fl_error(err, FEMLOD_ENOMEM, "out of memory");
     }
-    for (size_t e = 0; e < adj.ne; e++)
-        if (adj.edge_start[e + 1] - adj.edge_start[e] == 1) on[adj.edge_v[2 * e]] = on[adj.edge_v[2 * e + 1]] = 1;
+    for (size_t i = 0; i < 2 * ns; i++) on[sides[i]] = 1;
     size_t n = 0;
     for (size_t v = 0; v < m->nv; v++)
         if (on[v]) ids[n++] = (uint32_t)v;
     free(on);
-    fl_adjacency_free(&adj);
+    free(sides);
     *out = ids;
     *count = n;
     return FEMLOD_OK;

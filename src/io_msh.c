@@ -950,21 +950,54 @@ femlod_status fl_read_msh(femlod_mesh **out, const char *data, size_t size, cons
 
 /* {====== writer */
 
+/* Bounding box of the boundary sides' nodes. */
+static void sides_bbox(const femlod_mesh *m, const uint32_t *sides, size_t ns, double lo[3],
+                       double hi[3]) {
+    for (size_t i = 0; i < 2 * ns; i++)
+        for (int k = 0; k < 3; k++) {
+            double x = m->pos[3 * (size_t)sides[i] + k];
+            if (i == 0 || x < lo[k]) lo[k] = x;
+            if (i == 0 || x > hi[k]) hi[k] = x;
+        }
+}
+
 femlod_status fl_write_msh(const femlod_mesh *m, FILE *fp, int version, const char *path,
                            femlod_error *err) {
-    size_t nv = m->nv, nt = m->nt;
+    size_t nv = m->nv, nt = m->nt, nb = 0;
+    uint32_t *sides = NULL;
+    femlod_status st = fl_io_boundary_sides(m, &sides, &nb, err);
+    if (st != FEMLOD_OK) {
+        if (err) {
+            char msg[FEMLOD_ERROR_MESSAGE_SIZE];
+            snprintf(msg, sizeof msg, "%s", err->message);
+            fl_error(err, st, "%s: %s", path, msg);
+        }
+        return st;
+    }
     int ok = 1;
     ok &= fprintf(fp, "$MeshFormat\n%s 0 8\n$EndMeshFormat\n", version == 4 ? "4.1" : "2.2") > 0;
     /* Every triangle is in the physical surface 1, so gmsh (which saves only
-     * physical elements once groups exist) keeps them all. */
-    if (nt) ok &= fprintf(fp, "$PhysicalNames\n1\n2 1 \"surface\"\n$EndPhysicalNames\n") > 0;
+     * physical elements once groups exist) keeps them all; boundary edges,
+     * when there are any, are 2-node lines in the physical curve 2. */
+    if (nt) {
+        ok &= fprintf(fp, "$PhysicalNames\n%d\n", nb ? 2 : 1) > 0;
+        if (nb) ok &= fputs("1 2 \"boundary\"\n", fp) >= 0;
+        ok &= fputs("2 1 \"surface\"\n$EndPhysicalNames\n", fp) >= 0;
+    }
     if (version == 4) {
         if (nv) {
             double lo[3], hi[3];
+            ok &= fprintf(fp, "$Entities\n0 %d 1 0\n", nb ? 1 : 0) > 0;
+            if (nb) {
+                sides_bbox(m, sides, nb, lo, hi);
+                ok &= fputs("1 ", fp) >= 0;
+                ok &= fl_io_put_xyz(fp, lo, " ", " ");
+                ok &= fl_io_put_xyz(fp, hi, " ", " 1 2 0\n");
+            }
             femlod_mesh_bbox(m, lo, hi);
-            ok &= fputs("$Entities\n0 0 1 0\n1 ", fp) >= 0;
+            ok &= fputs("1 ", fp) >= 0;
             ok &= fl_io_put_xyz(fp, lo, " ", " ");
-            ok &= fl_io_put_xyz(fp, hi, " ", nt ? " 1 1 0\n" : " 0 0\n");
+            ok &= fl_io_put_xyz(fp, hi, " ", nt ? (nb ? " 1 1 1 1\n" : " 1 1 0\n") : " 0 0\n");
             ok &= fputs("$EndEntities\n", fp) >= 0;
             ok &= fprintf(fp, "$Nodes\n1 %zu 1 %zu\n2 1 0 %zu\n", nv, nv, nv) > 0;
             for (size_t i = 0; i < nv && ok; i++) ok &= fprintf(fp, "%zu\n", i + 1) > 0;
@@ -974,7 +1007,7 @@ femlod_status fl_write_msh(const femlod_mesh *m, FILE *fp, int version, const ch
         }
         ok &= fputs("$EndNodes\n$Elements\n", fp) >= 0;
         if (nt)
-            ok &= fprintf(fp, "1 %zu 1 %zu\n2 1 2 %zu\n", nt, nt, nt) > 0;
+            ok &= fprintf(fp, "%d %zu 1 %zu\n2 1 2 %zu\n", nb ? 2 : 1, nt + nb, nt + nb, nt) > 0;
         else
             ok &= fputs("0 0 0 0\n", fp) >= 0;
         for (size_t i = 0; i < nt && ok; i++) {
@@ -982,21 +1015,30 @@ femlod_status fl_write_msh(const femlod_mesh *m, FILE *fp, int version, const ch
             ok &= fprintf(fp, "%zu %lu %lu %lu\n", i + 1, (unsigned long)t[0] + 1,
                           (unsigned long)t[1] + 1, (unsigned long)t[2] + 1) > 0;
         }
+        if (nb) ok &= fprintf(fp, "1 1 1 %zu\n", nb) > 0;
+        for (size_t i = 0; i < nb && ok; i++)
+            ok &= fprintf(fp, "%zu %lu %lu\n", nt + i + 1, (unsigned long)sides[2 * i] + 1,
+                          (unsigned long)sides[2 * i + 1] + 1) > 0;
     } else {
         ok &= fprintf(fp, "$Nodes\n%zu\n", nv) > 0;
         for (size_t i = 0; i < nv && ok; i++) {
             ok &= fprintf(fp, "%zu ", i + 1) > 0;
             ok &= fl_io_put_xyz(fp, m->pos + 3 * i, " ", "\n");
         }
-        ok &= fprintf(fp, "$EndNodes\n$Elements\n%zu\n", nt) > 0;
+        ok &= fprintf(fp, "$EndNodes\n$Elements\n%zu\n", nt + nb) > 0;
         /* number, type 2, two tags (physical 1, elementary 1), nodes */
         for (size_t i = 0; i < nt && ok; i++) {
             const uint32_t *t = m->tri + 3 * i;
             ok &= fprintf(fp, "%zu 2 2 1 1 %lu %lu %lu\n", i + 1, (unsigned long)t[0] + 1,
                           (unsigned long)t[1] + 1, (unsigned long)t[2] + 1) > 0;
         }
+        /* lines: type 1, physical 2, elementary 1 */
+        for (size_t i = 0; i < nb && ok; i++)
+            ok &= fprintf(fp, "%zu 1 2 2 1 %lu %lu\n", nt + i + 1, (unsigned long)sides[2 * i] + 1,
+                          (unsigned long)sides[2 * i + 1] + 1) > 0;
     }
     ok &= fputs("$EndElements\n", fp) >= 0;
+    free(sides);
     return ok ? FEMLOD_OK : fl_io_write_error(path, err);
 }
 

@@ -218,10 +218,11 @@ static void test_writers(void) {
     char *t = write_text(m, "w.msh", NULL);
     expect_text(t,
                 "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n"
-                "$PhysicalNames\n1\n2 1 \"surface\"\n$EndPhysicalNames\n"
-                "$Entities\n0 0 1 0\n1 0 0 0 1 1 0.5 1 1 0\n$EndEntities\n"
+                "$PhysicalNames\n2\n1 2 \"boundary\"\n2 1 \"surface\"\n$EndPhysicalNames\n"
+                "$Entities\n0 1 1 0\n1 0 0 0 1 1 0.5 1 2 0\n1 0 0 0 1 1 0.5 1 1 1 1\n$EndEntities\n"
                 "$Nodes\n1 4 1 4\n2 1 0 4\n1\n2\n3\n4\n0 0 0\n1 0 0\n1 1 0\n0 1 0.5\n$EndNodes\n"
-                "$Elements\n1 2 1 2\n2 1 2 2\n1 1 2 3\n2 1 3 4\n$EndElements\n",
+                "$Elements\n2 6 1 6\n2 1 2 2\n1 1 2 3\n2 1 3 4\n"
+                "1 1 1 4\n3 1 2\n4 2 3\n5 3 4\n6 4 1\n$EndElements\n",
                 "msh 4.1");
     free(t);
     femlod_write_options o = FEMLOD_WRITE_OPTIONS_INIT;
@@ -229,10 +230,29 @@ static void test_writers(void) {
     t = write_text(m, "w2.msh", &o);
     expect_text(t,
                 "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n"
-                "$PhysicalNames\n1\n2 1 \"surface\"\n$EndPhysicalNames\n"
+                "$PhysicalNames\n2\n1 2 \"boundary\"\n2 1 \"surface\"\n$EndPhysicalNames\n"
                 "$Nodes\n4\n1 0 0 0\n2 1 0 0\n3 1 1 0\n4 0 1 0.5\n$EndNodes\n"
-                "$Elements\n2\n1 2 2 1 1 1 2 3\n2 2 2 1 1 1 3 4\n$EndElements\n",
+                "$Elements\n6\n1 2 2 1 1 1 2 3\n2 2 2 1 1 1 3 4\n"
+                "3 1 2 2 1 1 2\n4 1 2 2 1 2 3\n5 1 2 2 1 3 4\n6 1 2 2 1 4 1\n$EndElements\n",
                 "msh 2.2");
+    /* Read back: the lines are skipped, the surface is the same. */
+    char p[600];
+    tmp_path(p, sizeof p, "w2.msh");
+    femlod_write_options o2 = FEMLOD_WRITE_OPTIONS_INIT;
+    o2.format = FEMLOD_FORMAT_MSH2;
+    femlod_error e2 = {0, ""};
+    femlod_mesh *b2 = NULL;
+    CHECK(femlod_mesh_write(m, p, &o2, &e2) == FEMLOD_OK);
+    CHECK(femlod_mesh_read(&b2, p, NULL, &e2) == FEMLOD_OK);
+    CHECK(shape_same_mesh(m, b2));
+    femlod_mesh_free(b2);
+    unlink(p);
+    /* A closed surface has no boundary group. */
+    femlod_mesh *tet = shape_tetrahedron();
+    char *tt = write_text(tet, "tet.msh", NULL);
+    CHECK(tt && !strstr(tt, "boundary") && strstr(tt, "$Entities\n0 0 1 0\n"));
+    free(tt);
+    femlod_mesh_free(tet);
     free(t);
     t = write_text(m, "w.mesh", NULL);
     expect_text(t,
@@ -251,11 +271,11 @@ static void test_writers(void) {
     if (t) {
         /* The stretch and size values are the library's, to the last digit. */
         char want[200], num[40];
-        const double *p = m->pos;
-        fl_format_double(num, sizeof num, femlod_triangle_stretch(p, p + 3, p + 6));
+        const double *xyz = m->pos;
+        fl_format_double(num, sizeof num, femlod_triangle_stretch(xyz, xyz + 3, xyz + 6));
         snprintf(want, sizeof want, "LOOKUP_TABLE default\n%s\n", num);
         CHECK_STR_HAS(t, want);
-        fl_format_double(num, sizeof num, femlod_triangle_size(p, p + 6, p + 9));
+        fl_format_double(num, sizeof num, femlod_triangle_size(xyz, xyz + 6, xyz + 9));
         snprintf(want, sizeof want, "%s\nPOINT_DATA 4\nSCALARS valence int 1\nLOOKUP_TABLE default\n"
                  "3\n2\n3\n2\n", num);
         CHECK_STR_HAS(t, want);

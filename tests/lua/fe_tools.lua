@@ -64,8 +64,9 @@ T.check(T.readfile(path("again.msh")) == T.readfile(path("cover.msh")), "determi
 
 -- {====== gmsh
 if have("gmsh") then
+  local code, out
   for _, f in ipairs { "cover.msh", "cover22.msh" } do
-    local code, out = sh("gmsh -check " .. f)
+    code, out = sh("gmsh -check " .. f)
     T.eq(code, 0, "gmsh -check " .. f)
     T.eq(tonumber(out:match("Info%s*: (%d+) nodes")), counts.vertices, f .. ": gmsh's node count")
     T.eq(tonumber(out:match("Info%s*: (%d+) elements")), 6000, f .. ": gmsh's element count")
@@ -73,14 +74,31 @@ if have("gmsh") then
   end
   -- gmsh also reads the Medit and VTK files: the same 6000 triangles.
   for _, f in ipairs { "cover.mesh", "cover.vtk" } do
-    local code, out = sh("gmsh -check " .. f)
+    code, out = sh("gmsh -check " .. f)
     T.eq(code, 0, "gmsh -check " .. f)
     T.eq(tonumber(out:match("Checking mesh coherence %((%d+) elements%)")), 6000,
       f .. ": gmsh's element count")
     T.check(not out:find("Warning") and not out:find("Error"), f .. ": gmsh has no warning: " .. out)
   end
+  -- An open surface: its boundary edges are 2-node lines in the physical
+  -- curve "boundary", which gmsh keeps and femlod skips on reading.
+  local open <close> = femlod.load(P.shared .. "/sphereWithHole.stl")
+  local nb = open:quality().boundary_edges
+  T.check(nb > 0, "sphereWithHole has a boundary")
+  open:save(path("open.msh"))
+  code, out = sh("gmsh -check open.msh")
+  T.eq(tonumber(out:match("Info%s*: (%d+) elements")), open:counts().triangles + nb,
+    "open.msh: gmsh counts the triangles and the boundary lines")
+  T.eq(sh("gmsh -0 open.msh -format msh22 -o open22.msh"), 0, "gmsh re-exports open.msh")
+  local open22 <close> = femlod.load(path("open22.msh"))
+  T.eq(open22:counts().triangles, open:counts().triangles, "the re-export has the triangles")
+  local lines = 0
+  for line in T.readfile(path("open22.msh")):gmatch("[^\n]+") do
+    if line:match("^%d+ 1 2 2 1 %d+ %d+$") then lines = lines + 1 end
+  end
+  T.eq(lines, nb, "gmsh's re-export keeps the boundary lines in physical group 2")
   -- gmsh's own re-export (4.1 to 2.2) reads back to the same surface.
-  local code = sh("gmsh -0 cover.msh -format msh22 -o gmsh22.msh")
+  code = sh("gmsh -0 cover.msh -format msh22 -o gmsh22.msh")
   T.eq(code, 0, "gmsh -0 re-export")
   local back <close> = femlod.load(path("gmsh22.msh"))
   local pa, pb = cover:positions(), back:positions()
