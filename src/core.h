@@ -247,6 +247,10 @@ FL_INTERNAL femlod_status fl_write_medit(const femlod_mesh *m, FILE *fp, const c
  * A triangle listing an edge twice (a, b, a) counts it as one side. */
 FL_INTERNAL femlod_status fl_io_boundary_sides(const femlod_mesh *m, uint32_t **sides,
                                                size_t *count, femlod_error *err);
+/* A reader's end: on st == FEMLOD_OK moves b into *out (ENOMEM names
+ * name); frees b in every case and returns the outcome. */
+FL_INTERNAL femlod_status fl_io_finish(fl_meshbuf *b, femlod_status st, femlod_mesh **out,
+                                       const char *name, femlod_error *err);
 /* Fills err with "PATH: cannot write: <strerror(errno), EIO when 0>". */
 FL_INTERNAL femlod_status fl_io_write_error(const char *path, femlod_error *err);
 /* Writes x y z with the shortest round-trip digits, separated by sep, then

@@ -379,6 +379,19 @@ femlod_status fl_io_boundary_sides(const femlod_mesh *m, uint32_t **sides, size_
     return FEMLOD_OK;
 }
 
+femlod_status fl_io_finish(fl_meshbuf *b, femlod_status st, femlod_mesh **out, const char *name,
+                           femlod_error *err) {
+    if (st == FEMLOD_OK) {
+        femlod_mesh *m = fl_meshbuf_finish(b);
+        if (!m)
+            st = fl_error(err, FEMLOD_ENOMEM, "%s: out of memory", name);
+        else
+            *out = m;
+    }
+    fl_meshbuf_free(b);
+    return st;
+}
+
 femlod_status fl_io_write_error(const char *path, femlod_error *err) {
     int e = errno;
     return fl_error(err, FEMLOD_EIO, "%s: cannot write: %s", path, strerror(e ? e : EIO));

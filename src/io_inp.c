@@ -35,10 +35,12 @@ static femlod_status check_sets(const femlod_index_set *sets, size_t count, size
         if (!name || !*name)
             return fl_error(err, FEMLOD_EINPUT, "%s: %s set %zu has no name", path, kind, i + 1);
         size_t len = strlen(name);
-        int ok = len <= 80 && ((name[0] >= 'A' && name[0] <= 'Z') || (name[0] >= 'a' && name[0] <= 'z'));
+        int ok =
+            len <= 80 && ((name[0] >= 'A' && name[0] <= 'Z') || (name[0] >= 'a' && name[0] <= 'z'));
         for (size_t k = 1; ok && k < len; k++) {
             char c = name[k];
-            ok = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
+            ok = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
+                 c == '_';
         }
         char q[48];
         if (!ok)
@@ -48,20 +50,23 @@ static femlod_status check_sets(const femlod_index_set *sets, size_t count, size
                             path, kind, fl_io_quote(q, sizeof q, name, len));
         for (const char *const *r = reserved; *r; r++)
             if (same_name(name, *r))
-                return fl_error(err, FEMLOD_EINPUT, "%s: %s set name '%s' is reserved (NALL, EALL, NBOUNDARY)",
-                                path, kind, name);
+                return fl_error(err, FEMLOD_EINPUT,
+                                "%s: %s set name '%s' is reserved (NALL, EALL, NBOUNDARY)", path,
+                                kind, name);
         for (size_t j = 0; j < i; j++)
             if (same_name(name, sets[j].name))
                 return fl_error(err, FEMLOD_EINPUT,
-                                "%s: %s set '%s' given twice (names ignore case)", path, kind, name);
+                                "%s: %s set '%s' given twice (names ignore case)", path, kind,
+                                name);
         if (s->count == 0)
             return fl_error(err, FEMLOD_EINPUT, "%s: %s set '%s' is empty", path, kind, name);
         if (!s->indices)
             return fl_error(err, FEMLOD_EINPUT, "%s: %s set '%s' has no indices", path, kind, name);
         for (size_t k = 0; k < s->count; k++)
             if (s->indices[k] >= limit)
-                return fl_error(err, FEMLOD_EINPUT, "%s: %s set '%s': index %lu out of range (%zu %s)",
-                                path, kind, name, (unsigned long)s->indices[k], limit, what);
+                return fl_error(err, FEMLOD_EINPUT,
+                                "%s: %s set '%s': index %lu out of range (%zu %s)", path, kind,
+                                name, (unsigned long)s->indices[k], limit, what);
     }
     return FEMLOD_OK;
 }
@@ -159,8 +164,10 @@ femlod_status fl_write_inp(const femlod_mesh *m, FILE *fp, const femlod_write_op
         ok &= put_ids(fp, bnd, nb);
     }
     free(bnd);
-    for (size_t i = 0; i < nns && st == FEMLOD_OK; i++) st = put_set(fp, "NSET", &ns[i], &ok, path, err);
-    for (size_t i = 0; i < nes && st == FEMLOD_OK; i++) st = put_set(fp, "ELSET", &es[i], &ok, path, err);
+    for (size_t i = 0; i < nns && st == FEMLOD_OK; i++)
+        st = put_set(fp, "NSET", &ns[i], &ok, path, err);
+    for (size_t i = 0; i < nes && st == FEMLOD_OK; i++)
+        st = put_set(fp, "ELSET", &es[i], &ok, path, err);
     if (st != FEMLOD_OK) return st;
     return ok ? FEMLOD_OK : fl_io_write_error(path, err);
 }

@@ -33,8 +33,8 @@ static const struct {
     const char *word;
     unsigned values;
 } skipped[] = {
-    {"Edges", 3},         {"Tetrahedra", 5},       {"Hexahedra", 9},       {"Prisms", 7},
-    {"Pyramids", 6},      {"Corners", 1},          {"Ridges", 1},          {"RequiredVertices", 1},
+    {"Edges", 3},         {"Tetrahedra", 5},        {"Hexahedra", 9},      {"Prisms", 7},
+    {"Pyramids", 6},      {"Corners", 1},           {"Ridges", 1},         {"RequiredVertices", 1},
     {"RequiredEdges", 1}, {"RequiredTriangles", 1}, {"Normals", 3},        {"NormalAtVertices", 2},
     {"Tangents", 3},      {"TangentAtVertices", 2}, {"TangentAtEdges", 3}, {"Identifier", 0},
 };
@@ -49,12 +49,15 @@ static femlod_status count_of(medit_reader *r, const char *what, uint64_t *v, si
     size_t n;
     char q[48];
     const char *s = fl_text_next(&r->t, &n);
-    if (!s) return fl_text_fail(&r->t, FEMLOD_EPARSE, "file ends where the %s count was expected", what);
+    if (!s)
+        return fl_text_fail(&r->t, FEMLOD_EPARSE, "file ends where the %s count was expected",
+                            what);
     if (!fl_text_u64(s, n, v))
-        return fl_text_fail(&r->t, FEMLOD_EPARSE, "bad %s count '%s'", what, fl_io_quote(q, sizeof q, s, n));
+        return fl_text_fail(&r->t, FEMLOD_EPARSE, "bad %s count '%s'", what,
+                            fl_io_quote(q, sizeof q, s, n));
     if (*v > UINT32_MAX)
-        return fl_text_fail(&r->t, FEMLOD_ELIMIT, "%llu %s (limit %u)", (unsigned long long)*v, what,
-                            (unsigned)UINT32_MAX);
+        return fl_text_fail(&r->t, FEMLOD_ELIMIT, "%llu %s (limit %u)", (unsigned long long)*v,
+                            what, (unsigned)UINT32_MAX);
     uint64_t left = (uint64_t)(r->t.end - r->t.p);
     if (*v * least > left + 1)
         return fl_text_fail(&r->t, FEMLOD_EPARSE, "%llu %s declared, but only %llu bytes follow",
@@ -62,7 +65,8 @@ static femlod_status count_of(medit_reader *r, const char *what, uint64_t *v, si
     return FEMLOD_OK;
 }
 
-static femlod_status value(medit_reader *r, const char *what, uint64_t item, const char **s, size_t *n) {
+static femlod_status value(medit_reader *r, const char *what, uint64_t item, const char **s,
+                           size_t *n) {
     if (!(*s = fl_text_next(&r->t, n)))
         return fl_text_fail(&r->t, FEMLOD_EPARSE, "file ends inside %s %llu", what,
                             (unsigned long long)item + 1);
@@ -79,8 +83,8 @@ static femlod_status integer(medit_reader *r, const char *what, uint64_t item) {
     if (st != FEMLOD_OK) return st;
     if (n > 1 && s[0] == '-') s++, n--;
     if (!fl_text_u64(s, n, &v))
-        return fl_text_fail(&r->t, FEMLOD_EPARSE, "bad integer '%s' in %s %llu", fl_io_quote(q, sizeof q, s, n),
-                            what, (unsigned long long)item + 1);
+        return fl_text_fail(&r->t, FEMLOD_EPARSE, "bad integer '%s' in %s %llu",
+                            fl_io_quote(q, sizeof q, s, n), what, (unsigned long long)item + 1);
     return FEMLOD_OK;
 }
 
@@ -88,10 +92,12 @@ static femlod_status vertices(medit_reader *r) {
     uint64_t count;
     femlod_status st = count_of(r, "vertices", &count, 8);
     if (st != FEMLOD_OK) return st;
-    if (r->have_vertices) return fl_text_fail(&r->t, FEMLOD_EUNSUPPORTED, "a second Vertices section");
+    if (r->have_vertices)
+        return fl_text_fail(&r->t, FEMLOD_EUNSUPPORTED, "a second Vertices section");
     r->have_vertices = 1;
     if (!fl_meshbuf_reserve(&r->b, (size_t)count, 0))
-        return fl_text_fail(&r->t, FEMLOD_ENOMEM, "out of memory for %llu vertices", (unsigned long long)count);
+        return fl_text_fail(&r->t, FEMLOD_ENOMEM, "out of memory for %llu vertices",
+                            (unsigned long long)count);
     char why[128];
     for (uint64_t i = 0; i < count; i++) {
         double c[3];
@@ -99,7 +105,8 @@ static femlod_status vertices(medit_reader *r) {
             const char *s;
             size_t n;
             if ((st = value(r, "vertex", i, &s, &n)) != FEMLOD_OK) return st;
-            if (!fl_io_coord(s, n, &c[k], why, sizeof why)) return fl_text_fail(&r->t, FEMLOD_EPARSE, "%s", why);
+            if (!fl_io_coord(s, n, &c[k], why, sizeof why))
+                return fl_text_fail(&r->t, FEMLOD_EPARSE, "%s", why);
         }
         if ((st = integer(r, "vertex", i)) != FEMLOD_OK) return st;
         if (!fl_meshbuf_add_vertex(&r->b, c[0], c[1], c[2]))
@@ -114,7 +121,8 @@ static femlod_status triangles(medit_reader *r) {
     if (st != FEMLOD_OK) return st;
     if (!r->have_vertices) return fl_text_fail(&r->t, FEMLOD_EPARSE, "Triangles before Vertices");
     if (!fl_meshbuf_reserve(&r->b, r->b.nv, r->b.nt + (size_t)count))
-        return fl_text_fail(&r->t, FEMLOD_ENOMEM, "out of memory for %llu triangles", (unsigned long long)count);
+        return fl_text_fail(&r->t, FEMLOD_ENOMEM, "out of memory for %llu triangles",
+                            (unsigned long long)count);
     char q[48];
     for (uint64_t i = 0; i < count; i++) {
         uint32_t v[3];
@@ -124,7 +132,8 @@ static femlod_status triangles(medit_reader *r) {
             uint64_t idx;
             if ((st = value(r, "triangle", i, &s, &n)) != FEMLOD_OK) return st;
             if (!fl_text_u64(s, n, &idx))
-                return fl_text_fail(&r->t, FEMLOD_EPARSE, "bad vertex index '%s'", fl_io_quote(q, sizeof q, s, n));
+                return fl_text_fail(&r->t, FEMLOD_EPARSE, "bad vertex index '%s'",
+                                    fl_io_quote(q, sizeof q, s, n));
             if (idx == 0 || idx > r->b.nv)
                 return fl_text_fail(&r->t, FEMLOD_EPARSE, "vertex index %llu out of range (1..%zu)",
                                     (unsigned long long)idx, r->b.nv);
@@ -132,7 +141,8 @@ static femlod_status triangles(medit_reader *r) {
         }
         if ((st = integer(r, "triangle", i)) != FEMLOD_OK) return st;
         if (r->b.nt >= UINT32_MAX)
-            return fl_text_fail(&r->t, FEMLOD_ELIMIT, "too many triangles (limit %u)", (unsigned)UINT32_MAX);
+            return fl_text_fail(&r->t, FEMLOD_ELIMIT, "too many triangles (limit %u)",
+                                (unsigned)UINT32_MAX);
         if (!fl_meshbuf_add_triangle(&r->b, v[0], v[1], v[2]))
             return fl_text_fail(&r->t, FEMLOD_ENOMEM, "out of memory");
     }
@@ -151,15 +161,17 @@ static femlod_status parse(medit_reader *r) {
     femlod_status st;
     if ((st = count_of(r, "version", &version, 0)) != FEMLOD_OK) return st;
     if (version < 1 || version > 2)
-        return fl_text_fail(&r->t, FEMLOD_EUNSUPPORTED, "MeshVersionFormatted %llu (1 and 2 are read)",
+        return fl_text_fail(&r->t, FEMLOD_EUNSUPPORTED,
+                            "MeshVersionFormatted %llu (1 and 2 are read)",
                             (unsigned long long)version);
     int ended = 0;
     while (!ended && (s = fl_text_next(&r->t, &n))) {
         if (is_word(s, n, "Dimension")) {
             uint64_t d;
             if ((st = count_of(r, "dimension", &d, 0)) != FEMLOD_OK) return st;
-            if (d != 3) return fl_text_fail(&r->t, FEMLOD_EUNSUPPORTED, "Dimension %llu (only 3 is read)",
-                                            (unsigned long long)d);
+            if (d != 3)
+                return fl_text_fail(&r->t, FEMLOD_EUNSUPPORTED, "Dimension %llu (only 3 is read)",
+                                    (unsigned long long)d);
             r->dimension = 3;
             continue;
         }
@@ -168,7 +180,8 @@ static femlod_status parse(medit_reader *r) {
             break;
         }
         if (!r->dimension && !is_word(s, n, "Identifier"))
-            return fl_text_fail(&r->t, FEMLOD_EPARSE, "'%s' before 'Dimension'", fl_io_quote(q, sizeof q, s, n));
+            return fl_text_fail(&r->t, FEMLOD_EPARSE, "'%s' before 'Dimension'",
+                                fl_io_quote(q, sizeof q, s, n));
         if (is_word(s, n, "Vertices")) {
             st = vertices(r);
         } else if (is_word(s, n, "Triangles")) {
@@ -188,22 +201,26 @@ static femlod_status parse(medit_reader *r) {
                 continue;
             }
             uint64_t count;
-            if ((st = count_of(r, skipped[k].word, &count, 2 * skipped[k].values)) != FEMLOD_OK) return st;
+            if ((st = count_of(r, skipped[k].word, &count, 2 * skipped[k].values)) != FEMLOD_OK)
+                return st;
             for (uint64_t i = 0; i < count * skipped[k].values; i++) {
                 const char *v;
                 size_t vn;
                 char *e;
-                if ((st = value(r, skipped[k].word, i / skipped[k].values, &v, &vn)) != FEMLOD_OK) return st;
+                if ((st = value(r, skipped[k].word, i / skipped[k].values, &v, &vn)) != FEMLOD_OK)
+                    return st;
                 fl_strtod(v, &e);
                 if (e != v + vn)
-                    return fl_text_fail(&r->t, FEMLOD_EPARSE, "bad number '%s'", fl_io_quote(q, sizeof q, v, vn));
+                    return fl_text_fail(&r->t, FEMLOD_EPARSE, "bad number '%s'",
+                                        fl_io_quote(q, sizeof q, v, vn));
             }
         }
         if (st != FEMLOD_OK) return st;
     }
     if (!ended) return fl_text_fail(&r->t, FEMLOD_EPARSE, "file ends without 'End'");
     if ((s = fl_text_next(&r->t, &n)))
-        return fl_text_fail(&r->t, FEMLOD_EPARSE, "data after 'End': '%s'", fl_io_quote(q, sizeof q, s, n));
+        return fl_text_fail(&r->t, FEMLOD_EPARSE, "data after 'End': '%s'",
+                            fl_io_quote(q, sizeof q, s, n));
     return FEMLOD_OK;
 }
 
@@ -212,16 +229,7 @@ femlod_status fl_read_medit(femlod_mesh **out, const char *data, size_t size, co
     medit_reader r;
     memset(&r, 0, sizeof r);
     fl_text_init(&r.t, data, size, name, '#', err);
-    femlod_status st = parse(&r);
-    if (st == FEMLOD_OK) {
-        femlod_mesh *m = fl_meshbuf_finish(&r.b);
-        if (!m)
-            st = fl_error(err, FEMLOD_ENOMEM, "%s: out of memory", name);
-        else
-            *out = m;
-    }
-    fl_meshbuf_free(&r.b);
-    return st;
+    return fl_io_finish(&r.b, parse(&r), out, name, err);
 }
 
 /* }====== */

@@ -80,7 +80,7 @@ typedef struct node_key {
 
 typedef struct msh_reader {
     fl_text t;
-    int version; /* 2 or 4 */
+    int version;      /* 2 or 4 */
     int binary, swap; /* binary data; little-endian */
     fl_meshbuf b;
     uint64_t *tags; /* tags[i]: node tag of vertex i */
@@ -94,8 +94,8 @@ typedef struct msh_reader {
     node_key *keys;
     uint64_t min_tag, max_tag;
     int have_nodes, have_elements;
-    size_t skipped;      /* elements of other dimensions */
-    uint64_t skip_type;  /* the first one's type */
+    size_t skipped;     /* elements of other dimensions */
+    uint64_t skip_type; /* the first one's type */
 } msh_reader;
 
 static void reader_free(msh_reader *r) {
@@ -124,8 +124,10 @@ static femlod_status need_u64(msh_reader *r, uint64_t *v, const char *what) {
     femlod_status st = need(r, &s, &n, what);
     if (st != FEMLOD_OK) return st;
     if (n > 1 && s[0] == '$')
-        return fl_text_fail(&r->t, FEMLOD_EPARSE, "'%s' where the %s was expected (a count "
-                            "promises more data)", quote(q, sizeof q, s, n), what);
+        return fl_text_fail(&r->t, FEMLOD_EPARSE,
+                            "'%s' where the %s was expected (a count "
+                            "promises more data)",
+                            quote(q, sizeof q, s, n), what);
     if (!fl_text_u64(s, n, v))
         return fl_text_fail(&r->t, FEMLOD_EPARSE, "bad %s '%s'", what, quote(q, sizeof q, s, n));
     return FEMLOD_OK;
@@ -152,7 +154,8 @@ static femlod_status need_coord(msh_reader *r, double *x, uint64_t node) {
     if (!(s = fl_text_next(&r->t, &n)))
         return fl_text_fail(&r->t, FEMLOD_EPARSE, "file ends inside the coordinates of node %llu",
                             (unsigned long long)node);
-    if (!fl_io_coord(s, n, x, why, sizeof why)) return fl_text_fail(&r->t, FEMLOD_EPARSE, "%s", why);
+    if (!fl_io_coord(s, n, x, why, sizeof why))
+        return fl_text_fail(&r->t, FEMLOD_EPARSE, "%s", why);
     return FEMLOD_OK;
 }
 
@@ -199,7 +202,8 @@ static femlod_status push_tag(msh_reader *r, size_t at, uint64_t tag) {
 
 static femlod_status add_vertex(msh_reader *r, const double c[3]) {
     if (r->b.nv >= UINT32_MAX)
-        return fl_text_fail(&r->t, FEMLOD_ELIMIT, "too many nodes (limit %u)", (unsigned)UINT32_MAX);
+        return fl_text_fail(&r->t, FEMLOD_ELIMIT, "too many nodes (limit %u)",
+                            (unsigned)UINT32_MAX);
     if (!fl_meshbuf_add_vertex(&r->b, c[0], c[1], c[2]))
         return fl_text_fail(&r->t, FEMLOD_ENOMEM, "out of memory for nodes");
     return FEMLOD_OK;
@@ -212,9 +216,9 @@ static int cmp_key(const void *a, const void *b) {
 }
 
 static femlod_status duplicate(msh_reader *r, uint32_t first, uint32_t second) {
-    return fl_error(r->t.err, FEMLOD_EPARSE, "%s:%zu: node tag %llu is defined twice (first on line %zu)",
-                    r->t.name, r->tag_line[second], (unsigned long long)r->tags[second],
-                    r->tag_line[first]);
+    return fl_error(r->t.err, FEMLOD_EPARSE,
+                    "%s:%zu: node tag %llu is defined twice (first on line %zu)", r->t.name,
+                    r->tag_line[second], (unsigned long long)r->tags[second], r->tag_line[first]);
 }
 
 /* Builds the tag lookup once all nodes are read; finds duplicate tags. */
@@ -371,7 +375,8 @@ static femlod_status nodes_v2(msh_reader *r) {
             return fl_text_fail(&r->t, FEMLOD_EPARSE, "'$EndNodes' after %llu of %llu nodes",
                                 (unsigned long long)i, (unsigned long long)count);
         if (!fl_text_u64(s, n, &tag))
-            return fl_text_fail(&r->t, FEMLOD_EPARSE, "bad node tag '%s'", quote(q, sizeof q, s, n));
+            return fl_text_fail(&r->t, FEMLOD_EPARSE, "bad node tag '%s'",
+                                quote(q, sizeof q, s, n));
         if ((st = push_tag(r, r->b.nv, tag)) != FEMLOD_OK) return st;
         double c[3];
         for (int k = 0; k < 3; k++)
@@ -423,10 +428,9 @@ static femlod_status nodes_v4(msh_reader *r) {
             uint64_t tag;
             if ((st = need_u64(r, &tag, "node tag")) != FEMLOD_OK) return st;
             if (tag < lo || tag > hi)
-                return fl_text_fail(&r->t, FEMLOD_EPARSE,
-                                    "node tag %llu outside the header's range %llu..%llu",
-                                    (unsigned long long)tag, (unsigned long long)lo,
-                                    (unsigned long long)hi);
+                return fl_text_fail(
+                    &r->t, FEMLOD_EPARSE, "node tag %llu outside the header's range %llu..%llu",
+                    (unsigned long long)tag, (unsigned long long)lo, (unsigned long long)hi);
             if ((st = push_tag(r, base + (size_t)j, tag)) != FEMLOD_OK) return st;
         }
         for (uint64_t j = 0; j < n; j++) {
@@ -441,9 +445,9 @@ static femlod_status nodes_v4(msh_reader *r) {
         total += n;
     }
     if (total != count)
-        return fl_text_fail(&r->t, FEMLOD_EPARSE, "header declares %llu nodes, its %llu blocks hold %llu",
-                            (unsigned long long)count, (unsigned long long)blocks,
-                            (unsigned long long)total);
+        return fl_text_fail(
+            &r->t, FEMLOD_EPARSE, "header declares %llu nodes, its %llu blocks hold %llu",
+            (unsigned long long)count, (unsigned long long)blocks, (unsigned long long)total);
     char after[64];
     snprintf(after, sizeof after, "%llu node blocks", (unsigned long long)blocks);
     return need_end(r, "$EndNodes", after);
@@ -523,10 +527,9 @@ static femlod_status elements_v4(msh_reader *r) {
         total += n;
     }
     if (total != count)
-        return fl_text_fail(&r->t, FEMLOD_EPARSE,
-                            "header declares %llu elements, its %llu blocks hold %llu",
-                            (unsigned long long)count, (unsigned long long)blocks,
-                            (unsigned long long)total);
+        return fl_text_fail(
+            &r->t, FEMLOD_EPARSE, "header declares %llu elements, its %llu blocks hold %llu",
+            (unsigned long long)count, (unsigned long long)blocks, (unsigned long long)total);
     char after[64];
     snprintf(after, sizeof after, "%llu element blocks", (unsigned long long)blocks);
     return need_end(r, "$EndElements", after);
@@ -621,7 +624,8 @@ static femlod_status bin_nodes_v2(msh_reader *r, uint64_t count) {
     for (uint64_t i = 0; i < count; i++) {
         const char *at = r->t.p;
         int32_t tag = bin_i32(r);
-        if (tag <= 0) return bin_fail(r, at, "node tag %ld is invalid (tags start at 1)", (long)tag);
+        if (tag <= 0)
+            return bin_fail(r, at, "node tag %ld is invalid (tags start at 1)", (long)tag);
         if ((st = push_tag(r, r->b.nv, (uint64_t)tag)) != FEMLOD_OK) return st;
         if ((st = bin_coords(r, 3)) != FEMLOD_OK) return st;
     }
@@ -650,10 +654,11 @@ static femlod_status bin_nodes_v4(msh_reader *r) {
             return bin_fail(r, at, "node block %llu: entity dimension %ld, parametric flag %ld",
                             (unsigned long long)blk + 1, (long)dim, (long)param);
         if (n > count - total)
-            return bin_fail(r, at + 12, "node block %llu holds %llu nodes, more than the %llu left "
-                            "of the header's %llu", (unsigned long long)blk + 1,
-                            (unsigned long long)n, (unsigned long long)(count - total),
-                            (unsigned long long)count);
+            return bin_fail(r, at + 12,
+                            "node block %llu holds %llu nodes, more than the %llu left "
+                            "of the header's %llu",
+                            (unsigned long long)blk + 1, (unsigned long long)n,
+                            (unsigned long long)(count - total), (unsigned long long)count);
         size_t values = 3 + (size_t)(param ? dim : 0);
         if ((st = bin_need(r, n, 8 + 8 * values, "node block")) != FEMLOD_OK) return st;
         size_t base = r->b.nv;
@@ -720,10 +725,13 @@ static femlod_status bin_elements_v2(msh_reader *r, uint64_t count) {
         const msh_type *mt;
         if ((st = bin_type(r, at, (uint64_t)(type < 0 ? 0 : type), &mt)) != FEMLOD_OK) return st;
         if (n <= 0 || (uint64_t)n > count - done || ntags < 0 || ntags > 64)
-            return bin_fail(r, at + 4, "element header: %ld elements with %ld tags (%llu of %llu "
-                            "elements left)", (long)n, (long)ntags,
-                            (unsigned long long)(count - done), (unsigned long long)count);
-        if ((st = bin_need(r, (uint64_t)n, 4 * (1 + (uint64_t)ntags + mt->nodes), "elements")) != FEMLOD_OK)
+            return bin_fail(r, at + 4,
+                            "element header: %ld elements with %ld tags (%llu of %llu "
+                            "elements left)",
+                            (long)n, (long)ntags, (unsigned long long)(count - done),
+                            (unsigned long long)count);
+        if ((st = bin_need(r, (uint64_t)n, 4 * (1 + (uint64_t)ntags + mt->nodes), "elements")) !=
+            FEMLOD_OK)
             return st;
         for (int32_t i = 0; i < n; i++) {
             bin_skip(r, 4 * (1 + (size_t)ntags));
@@ -748,16 +756,20 @@ static femlod_status bin_elements_v4(msh_reader *r) {
         int32_t type = bin_i32(r);
         uint64_t n = bin_u(r, 8);
         const msh_type *mt;
-        if ((st = bin_type(r, at + 8, (uint64_t)(type < 0 ? 0 : type), &mt)) != FEMLOD_OK) return st;
+        if ((st = bin_type(r, at + 8, (uint64_t)(type < 0 ? 0 : type), &mt)) != FEMLOD_OK)
+            return st;
         if (dim != mt->dim)
-            return bin_fail(r, at, "element block %llu: type %ld (%s) in an entity of dimension %ld",
+            return bin_fail(r, at,
+                            "element block %llu: type %ld (%s) in an entity of dimension %ld",
                             (unsigned long long)blk + 1, (long)type, mt->name, (long)dim);
         if (n > count - total)
-            return bin_fail(r, at + 12, "element block %llu holds %llu elements, more than the %llu "
-                            "left of the header's %llu", (unsigned long long)blk + 1,
-                            (unsigned long long)n, (unsigned long long)(count - total),
-                            (unsigned long long)count);
-        if ((st = bin_need(r, n, 8 * (1 + (uint64_t)mt->nodes), "element block")) != FEMLOD_OK) return st;
+            return bin_fail(r, at + 12,
+                            "element block %llu holds %llu elements, more than the %llu "
+                            "left of the header's %llu",
+                            (unsigned long long)blk + 1, (unsigned long long)n,
+                            (unsigned long long)(count - total), (unsigned long long)count);
+        if ((st = bin_need(r, n, 8 * (1 + (uint64_t)mt->nodes), "element block")) != FEMLOD_OK)
+            return st;
         for (uint64_t j = 0; j < n; j++) {
             bin_skip(r, 8);
             if ((st = bin_element(r, (uint64_t)type, mt, 8)) != FEMLOD_OK) return st;
@@ -800,7 +812,8 @@ static femlod_status bin_entities(msh_reader *r) {
 static femlod_status skip_section(msh_reader *r, const char *s, size_t n) {
     char end[80], q[48];
     if (n + 4 > sizeof end)
-        return fl_text_fail(&r->t, FEMLOD_EPARSE, "section name '%s' too long", quote(q, sizeof q, s, n));
+        return fl_text_fail(&r->t, FEMLOD_EPARSE, "section name '%s' too long",
+                            quote(q, sizeof q, s, n));
     memcpy(end, "$End", 4);
     memcpy(end + 4, s + 1, n - 1);
     end[n + 3] = '\0';
@@ -903,7 +916,8 @@ static femlod_status parse(msh_reader *r) {
             r->have_elements = 1;
             st = r->binary ? bin_elements(r) : r->version == 4 ? elements_v4(r) : elements_v2(r);
         } else if (r->binary && fl_text_is(s, n, "$Entities")) {
-            if ((st = bin_begin(r, "$Entities")) == FEMLOD_OK && (st = bin_entities(r)) == FEMLOD_OK)
+            if ((st = bin_begin(r, "$Entities")) == FEMLOD_OK &&
+                (st = bin_entities(r)) == FEMLOD_OK)
                 st = need_end(r, "$EndEntities", "the entities");
         } else if (fl_text_is(s, n, "$MeshFormat")) {
             return fl_text_fail(&r->t, FEMLOD_EPARSE, "a second '$MeshFormat' section");
@@ -934,14 +948,7 @@ femlod_status fl_read_msh(femlod_mesh **out, const char *data, size_t size, cons
     msh_reader r;
     memset(&r, 0, sizeof r);
     fl_text_init(&r.t, data, size, name, 0, err);
-    femlod_status st = parse(&r);
-    if (st == FEMLOD_OK) {
-        femlod_mesh *m = fl_meshbuf_finish(&r.b);
-        if (!m)
-            st = fl_error(err, FEMLOD_ENOMEM, "%s: out of memory", name);
-        else
-            *out = m;
-    }
+    femlod_status st = fl_io_finish(&r.b, parse(&r), out, name, err);
     reader_free(&r);
     return st;
 }
@@ -1001,7 +1008,8 @@ femlod_status fl_write_msh(const femlod_mesh *m, FILE *fp, int version, const ch
             ok &= fputs("$EndEntities\n", fp) >= 0;
             ok &= fprintf(fp, "$Nodes\n1 %zu 1 %zu\n2 1 0 %zu\n", nv, nv, nv) > 0;
             for (size_t i = 0; i < nv && ok; i++) ok &= fprintf(fp, "%zu\n", i + 1) > 0;
-            for (size_t i = 0; i < nv && ok; i++) ok &= fl_io_put_xyz(fp, m->pos + 3 * i, " ", "\n");
+            for (size_t i = 0; i < nv && ok; i++)
+                ok &= fl_io_put_xyz(fp, m->pos + 3 * i, " ", "\n");
         } else {
             ok &= fputs("$Nodes\n0 0 0 0\n", fp) >= 0;
         }

@@ -42,7 +42,8 @@ femlod_status fl_write_vtk(const femlod_mesh *m, FILE *fp, const char *path, fem
     ok &= fprintf(fp, "CELL_TYPES %zu\n", nt) > 0;
     for (size_t i = 0; i < nt && ok; i++) ok &= fputs("5\n", fp) >= 0;
     if (nt) {
-        ok &= fprintf(fp, "CELL_DATA %zu\nSCALARS stretch double 1\nLOOKUP_TABLE default\n", nt) > 0;
+        ok &=
+            fprintf(fp, "CELL_DATA %zu\nSCALARS stretch double 1\nLOOKUP_TABLE default\n", nt) > 0;
         for (int pass = 0; pass < 2 && ok; pass++) {
             if (pass) ok &= fputs("SCALARS size double 1\nLOOKUP_TABLE default\n", fp) >= 0;
             for (size_t i = 0; i < nt && ok; i++) {
@@ -56,7 +57,8 @@ femlod_status fl_write_vtk(const femlod_mesh *m, FILE *fp, const char *path, fem
     }
     if (nv) {
         ok &= fprintf(fp, "POINT_DATA %zu\nSCALARS valence int 1\nLOOKUP_TABLE default\n", nv) > 0;
-        for (size_t i = 0; i < nv && ok; i++) ok &= fprintf(fp, "%lu\n", (unsigned long)valence[i]) > 0;
+        for (size_t i = 0; i < nv && ok; i++)
+            ok &= fprintf(fp, "%lu\n", (unsigned long)valence[i]) > 0;
     }
     free(valence);
     return ok ? FEMLOD_OK : fl_io_write_error(path, err);

@@ -120,7 +120,8 @@ static void test_sparse_tags(void) {
                           "1000000000000 0 0 0\n5 1 0 0\n1000000000000 0 1 0\n$EndNodes\n"
                           "$Elements\n0\n$EndElements\n";
     CHECK(from_text(far_dup, "dup.msh", &err) == NULL);
-    CHECK_STR_HAS(err.message, "dup.msh:8: node tag 1000000000000 is defined twice (first on line 6)");
+    CHECK_STR_HAS(err.message,
+                  "dup.msh:8: node tag 1000000000000 is defined twice (first on line 6)");
     /* No elements at all: the nodes, no triangles (as OFF with 0 faces). */
     m = from_text("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n0 0 0 0\n$EndNodes\n"
                   "$Elements\n0 0 0 0\n$EndElements\n",
@@ -177,7 +178,8 @@ static void test_binary_big_endian(void) {
     /* The same file cut inside the nodes names the byte. */
     m = NULL;
     CHECK(femlod_mesh_read_memory(&m, buf, 60, "be.msh", &o, &err) == FEMLOD_EPARSE && !m);
-    CHECK_STR_HAS(err.message, "be.msh: byte 49: nodes: 3 records of 28 bytes, only 11 bytes are left");
+    CHECK_STR_HAS(err.message,
+                  "be.msh: byte 49: nodes: 3 records of 28 bytes, only 11 bytes are left");
 }
 
 /* }====== */
@@ -209,7 +211,8 @@ static char *write_text(const femlod_mesh *m, const char *name, const femlod_wri
 
 static void expect_text(const char *got, const char *want, const char *what) {
     CHECK(got && strcmp(got, want) == 0);
-    if (got && strcmp(got, want) != 0) fprintf(stderr, "  %s:\n%s\n--- expected:\n%s\n", what, got, want);
+    if (got && strcmp(got, want) != 0)
+        fprintf(stderr, "  %s:\n%s\n--- expected:\n%s\n", what, got, want);
 }
 
 static void test_writers(void) {
@@ -276,8 +279,10 @@ static void test_writers(void) {
         snprintf(want, sizeof want, "LOOKUP_TABLE default\n%s\n", num);
         CHECK_STR_HAS(t, want);
         fl_format_double(num, sizeof num, femlod_triangle_size(xyz, xyz + 6, xyz + 9));
-        snprintf(want, sizeof want, "%s\nPOINT_DATA 4\nSCALARS valence int 1\nLOOKUP_TABLE default\n"
-                 "3\n2\n3\n2\n", num);
+        snprintf(want, sizeof want,
+                 "%s\nPOINT_DATA 4\nSCALARS valence int 1\nLOOKUP_TABLE default\n"
+                 "3\n2\n3\n2\n",
+                 num);
         CHECK_STR_HAS(t, want);
         CHECK_STR_HAS(t, "SCALARS size double 1\nLOOKUP_TABLE default\n");
     }
@@ -383,7 +388,8 @@ static void test_inp(void) {
     om.node_sets = ns;
     om.node_set_count = 1;
     CHECK(femlod_mesh_write(m, p, &om, &err) == FEMLOD_EINPUT);
-    CHECK_STR_HAS(err.message, "sets.msh: node and element sets are written to .inp only (format msh)");
+    CHECK_STR_HAS(err.message,
+                  "sets.msh: node and element sets are written to .inp only (format msh)");
     CHECK(access(p, F_OK) != 0);
     femlod_mesh_free(m);
 }
