@@ -10,38 +10,37 @@
 
 /* {====== format names */
 
+/* One list makes both tables below. */
+#define FORMATS(X)                                                                                 \
+    X(FEMLOD_FORMAT_OBJ, "obj")                                                                    \
+    X(FEMLOD_FORMAT_STL, "stl")                                                                    \
+    X(FEMLOD_FORMAT_STL_ASCII, "stl_ascii")                                                        \
+    X(FEMLOD_FORMAT_STL_BINARY, "stl_binary")                                                      \
+    X(FEMLOD_FORMAT_OFF, "off")                                                                    \
+    X(FEMLOD_FORMAT_PLY, "ply")                                                                    \
+    X(FEMLOD_FORMAT_PLY_ASCII, "ply_ascii")                                                        \
+    X(FEMLOD_FORMAT_PLY_BINARY, "ply_binary")                                                      \
+    X(FEMLOD_FORMAT_GLTF, "gltf")                                                                  \
+    X(FEMLOD_FORMAT_GLB, "glb")                                                                    \
+    X(FEMLOD_FORMAT_MSH, "msh")                                                                    \
+    X(FEMLOD_FORMAT_MSH2, "msh2")                                                                  \
+    X(FEMLOD_FORMAT_VTK, "vtk")                                                                    \
+    X(FEMLOD_FORMAT_INP, "inp")                                                                    \
+    X(FEMLOD_FORMAT_MEDIT, "medit")
+
+#define FORMAT_ENTRY(f, n) {f, n},
+#define FORMAT_NAME(f, n) n,
+
 static const struct {
     femlod_format format;
     const char *name;
-} format_names[] = {
-    {FEMLOD_FORMAT_OBJ, "obj"},
-    {FEMLOD_FORMAT_STL, "stl"},
-    {FEMLOD_FORMAT_STL_ASCII, "stl_ascii"},
-    {FEMLOD_FORMAT_STL_BINARY, "stl_binary"},
-    {FEMLOD_FORMAT_OFF, "off"},
-    {FEMLOD_FORMAT_PLY, "ply"},
-    {FEMLOD_FORMAT_PLY_ASCII, "ply_ascii"},
-    {FEMLOD_FORMAT_PLY_BINARY, "ply_binary"},
-    {FEMLOD_FORMAT_GLTF, "gltf"},
-    {FEMLOD_FORMAT_GLB, "glb"},
-    {FEMLOD_FORMAT_MSH, "msh"},
-    {FEMLOD_FORMAT_MSH2, "msh2"},
-    {FEMLOD_FORMAT_VTK, "vtk"},
-    {FEMLOD_FORMAT_INP, "inp"},
-    {FEMLOD_FORMAT_MEDIT, "medit"},
-};
+} format_names[] = {FORMATS(FORMAT_ENTRY)};
 
-#define FORMAT_COUNT (sizeof format_names / sizeof format_names[0])
+static const char *const format_name_list[] = {FORMATS(FORMAT_NAME) NULL};
 
 #define SUPPORTED_EXTENSIONS ".obj, .stl, .off, .ply, .gltf, .glb, .msh, .vtk, .inp, .mesh"
 
-const char *const *femlod_format_names(void) {
-    static const char *names[FORMAT_COUNT + 1];
-    /* Filled on every call (the same values each time): no first-call race. */
-    for (size_t i = 0; i < FORMAT_COUNT; i++) names[i] = format_names[i].name;
-    names[FORMAT_COUNT] = NULL;
-    return names;
-}
+const char *const *femlod_format_names(void) { return format_name_list; }
 
 const char *femlod_format_name(femlod_format format) {
     if (format == FEMLOD_FORMAT_AUTO) return "auto";
