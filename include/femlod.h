@@ -261,13 +261,23 @@ typedef enum femlod_format {
     FEMLOD_FORMAT_GLTF,       /* glTF 2.0, extension .gltf. Reading: JSON or GLB (told by the
                                  'glTF' magic); writing: GLB when the path ends in .glb, else
                                  JSON with the buffer embedded as a base64 data: URI */
-    FEMLOD_FORMAT_GLB         /* glTF 2.0 binary, extension .glb; writing: always GLB */
+    FEMLOD_FORMAT_GLB,        /* glTF 2.0 binary, extension .glb; writing: always GLB */
+    FEMLOD_FORMAT_MSH,        /* Gmsh MSH, extension .msh. Reading: 4.1 or 2.2, ASCII or binary
+                                 (told by the data); writing: 4.1 ASCII */
+    FEMLOD_FORMAT_MSH2,       /* Gmsh MSH 2.2 ASCII (writing; reading as FEMLOD_FORMAT_MSH) */
+    FEMLOD_FORMAT_VTK,        /* VTK legacy 4.2 ASCII UNSTRUCTURED_GRID, extension .vtk (writing
+                                 only) with per-triangle stretch and size, per-vertex valence */
+    FEMLOD_FORMAT_INP,        /* Abaqus/CalculiX input, extension .inp (writing only): *NODE,
+                                 *ELEMENT TYPE=S3, node and element sets */
+    FEMLOD_FORMAT_MEDIT       /* Medit (INRIA) ASCII, extension .mesh, as TetGen and MMG read it */
 } femlod_format;
 
 /* Format names as the Lua `format` option spells them: "obj", "stl",
  * "stl_ascii", "stl_binary", "off", "ply", "ply_ascii", "ply_binary",
- * "gltf", "glb". */
+ * "gltf", "glb", "msh", "msh2", "vtk", "inp", "medit". */
 const char *femlod_format_name(femlod_format format);
+/* The names above, in that order, ending with NULL (for option lists). */
+const char *const *femlod_format_names(void);
 /* Returns FEMLOD_FORMAT_AUTO when the name is unknown. */
 femlod_format femlod_format_from_name(const char *name);
 /* From a path's extension (case-insensitive); FEMLOD_FORMAT_AUTO when unknown. */
@@ -307,6 +317,16 @@ typedef enum femlod_color_by {
     FEMLOD_COLOR_VALENCE    /* per vertex: valence, on [3, 12] (clamped) */
 } femlod_color_by;
 
+/* A named list of indices (femlod_write_options.node_sets, element_sets).
+ * The name: a letter, then letters, digits or '_', at most 80 bytes
+ * (Abaqus's rule); names are compared ignoring case. Repeated indices are
+ * written once, in increasing order. */
+typedef struct femlod_index_set {
+    const char *name;
+    const uint32_t *indices;
+    size_t count;
+} femlod_index_set;
+
 typedef struct femlod_write_options {
     femlod_format format; /* FEMLOD_FORMAT_AUTO: from the extension */
     /* The fields below apply to glTF output only; set for another format,
@@ -317,8 +337,15 @@ typedef struct femlod_write_options {
      * stored as asset.extras.params; not JSON or not an object fails with
      * FEMLOD_EINPUT. Borrowed for the call. */
     const char *extras;
+    /* Named sets for the finite-element formats: .inp writes each as an
+     * *NSET or *ELSET; set for another format, they make the write fail with
+     * FEMLOD_EINPUT. Borrowed for the call; docs/formats.md has the rules. */
+    const femlod_index_set *node_sets;    /* 0-based vertex indices */
+    size_t node_set_count;
+    const femlod_index_set *element_sets; /* 0-based triangle indices */
+    size_t element_set_count;
 } femlod_write_options;
-#define FEMLOD_WRITE_OPTIONS_INIT {FEMLOD_FORMAT_AUTO, FEMLOD_COLOR_NONE, 0, NULL}
+#define FEMLOD_WRITE_OPTIONS_INIT {FEMLOD_FORMAT_AUTO, FEMLOD_COLOR_NONE, 0, NULL, NULL, 0, NULL, 0}
 
 /* Writes a mesh. Output goes to a temporary file beside path that is renamed
  * over path only once complete, so a failed write leaves path as it was.

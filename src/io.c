@@ -10,23 +10,37 @@
 
 /* {====== format names */
 
+/* One list makes both tables below. */
+#define FORMATS(X)                                                                                 \
+    X(FEMLOD_FORMAT_OBJ, "obj")                                                                    \
+    X(FEMLOD_FORMAT_STL, "stl")                                                                    \
+    X(FEMLOD_FORMAT_STL_ASCII, "stl_ascii")                                                        \
+    X(FEMLOD_FORMAT_STL_BINARY, "stl_binary")                                                      \
+    X(FEMLOD_FORMAT_OFF, "off")                                                                    \
+    X(FEMLOD_FORMAT_PLY, "ply")                                                                    \
+    X(FEMLOD_FORMAT_PLY_ASCII, "ply_ascii")                                                        \
+    X(FEMLOD_FORMAT_PLY_BINARY, "ply_binary")                                                      \
+    X(FEMLOD_FORMAT_GLTF, "gltf")                                                                  \
+    X(FEMLOD_FORMAT_GLB, "glb")                                                                    \
+    X(FEMLOD_FORMAT_MSH, "msh")                                                                    \
+    X(FEMLOD_FORMAT_MSH2, "msh2")                                                                  \
+    X(FEMLOD_FORMAT_VTK, "vtk")                                                                    \
+    X(FEMLOD_FORMAT_INP, "inp")                                                                    \
+    X(FEMLOD_FORMAT_MEDIT, "medit")
+
+#define FORMAT_ENTRY(f, n) {f, n},
+#define FORMAT_NAME(f, n) n,
+
 static const struct {
     femlod_format format;
     const char *name;
-} format_names[] = {
-    {FEMLOD_FORMAT_OBJ, "obj"},
-    {FEMLOD_FORMAT_STL, "stl"},
-    {FEMLOD_FORMAT_STL_ASCII, "stl_ascii"},
-    {FEMLOD_FORMAT_STL_BINARY, "stl_binary"},
-    {FEMLOD_FORMAT_OFF, "off"},
-    {FEMLOD_FORMAT_PLY, "ply"},
-    {FEMLOD_FORMAT_PLY_ASCII, "ply_ascii"},
-    {FEMLOD_FORMAT_PLY_BINARY, "ply_binary"},
-    {FEMLOD_FORMAT_GLTF, "gltf"},
-    {FEMLOD_FORMAT_GLB, "glb"},
-};
+} format_names[] = {FORMATS(FORMAT_ENTRY)};
 
-#define SUPPORTED_EXTENSIONS ".obj, .stl, .off, .ply, .gltf, .glb"
+static const char *const format_name_list[] = {FORMATS(FORMAT_NAME) NULL};
+
+#define SUPPORTED_EXTENSIONS ".obj, .stl, .off, .ply, .gltf, .glb, .msh, .vtk, .inp, .mesh"
+
+const char *const *femlod_format_names(void) { return format_name_list; }
 
 const char *femlod_format_name(femlod_format format) {
     if (format == FEMLOD_FORMAT_AUTO) return "auto";
@@ -64,14 +78,18 @@ femlod_format femlod_format_from_path(const char *path) {
                {"off", FEMLOD_FORMAT_OFF},
                {"ply", FEMLOD_FORMAT_PLY},
                {"gltf", FEMLOD_FORMAT_GLTF},
-               {"glb", FEMLOD_FORMAT_GLB}};
+               {"glb", FEMLOD_FORMAT_GLB},
+               {"msh", FEMLOD_FORMAT_MSH},
+               {"vtk", FEMLOD_FORMAT_VTK},
+               {"inp", FEMLOD_FORMAT_INP},
+               {"mesh", FEMLOD_FORMAT_MEDIT}};
     for (size_t i = 0; i < sizeof ext / sizeof ext[0]; i++)
         if (equal_nocase(dot + 1, ext[i].ext)) return ext[i].format;
     return FEMLOD_FORMAT_AUTO;
 }
 
 static int format_valid(femlod_format f) {
-    return f >= FEMLOD_FORMAT_AUTO && f <= FEMLOD_FORMAT_GLB;
+    return f >= FEMLOD_FORMAT_AUTO && f <= FEMLOD_FORMAT_MEDIT;
 }
 
 /* }====== */
@@ -111,6 +129,15 @@ static femlod_status dispatch_read(femlod_mesh **out, const char *data, size_t s
     case FEMLOD_FORMAT_PLY_BINARY: return fl_read_ply(out, data, size, name, err);
     case FEMLOD_FORMAT_GLTF:
     case FEMLOD_FORMAT_GLB: return fl_read_gltf(out, data, size, name, file, f, err);
+    case FEMLOD_FORMAT_MSH:
+    case FEMLOD_FORMAT_MSH2: return fl_read_msh(out, data, size, name, err);
+    case FEMLOD_FORMAT_MEDIT: return fl_read_medit(out, data, size, name, err);
+    case FEMLOD_FORMAT_VTK:
+    case FEMLOD_FORMAT_INP:
+        return fl_error(err, FEMLOD_EUNSUPPORTED,
+                        "%s: femlod writes %s files but does not read them (formats read: obj, "
+                        "stl, off, ply, gltf, glb, msh, medit)",
+                        name, femlod_format_name(f));
     case FEMLOD_FORMAT_AUTO: break;
     }
     return fl_error(err, FEMLOD_EINPUT, "%s: no format", name);
@@ -160,24 +187,38 @@ femlod_status femlod_mesh_write(const femlod_mesh *mesh, const char *path,
     femlod_format f = resolve_format(options ? options->format : FEMLOD_FORMAT_AUTO, path, err);
     if (f == FEMLOD_FORMAT_AUTO) return err ? err->status : FEMLOD_EINPUT;
     int gltf = f == FEMLOD_FORMAT_GLTF || f == FEMLOD_FORMAT_GLB;
+    int fe = f == FEMLOD_FORMAT_MSH || f == FEMLOD_FORMAT_MSH2 || f == FEMLOD_FORMAT_VTK ||
+             f == FEMLOD_FORMAT_INP || f == FEMLOD_FORMAT_MEDIT;
     if (options && !gltf && (options->color_by || options->normals || options->extras))
         return fl_error(err, FEMLOD_EINPUT,
                         "%s: color_by, normals and extras are glTF options (format %s)", path,
                         femlod_format_name(f));
+    if (options && f != FEMLOD_FORMAT_INP &&
+        (options->node_set_count || options->element_set_count))
+        return fl_error(err, FEMLOD_EINPUT,
+                        "%s: node and element sets are written to .inp only (format %s)", path,
+                        femlod_format_name(f));
     fl_out o;
     femlod_status s = fl_out_open(&o, path, err);
     if (s != FEMLOD_OK) return s;
-    if (gltf) {
+    errno = 0;
+    if (gltf || fe) {
         /* "gltf" names the family, as "stl" does: GLB for a .glb name. */
         int binary = f == FEMLOD_FORMAT_GLB || femlod_format_from_path(path) == FEMLOD_FORMAT_GLB;
-        s = fl_write_gltf(mesh, o.fp, binary, options, path, err);
+        switch (f) {
+        case FEMLOD_FORMAT_MSH: s = fl_write_msh(mesh, o.fp, 4, path, err); break;
+        case FEMLOD_FORMAT_MSH2: s = fl_write_msh(mesh, o.fp, 2, path, err); break;
+        case FEMLOD_FORMAT_VTK: s = fl_write_vtk(mesh, o.fp, path, err); break;
+        case FEMLOD_FORMAT_INP: s = fl_write_inp(mesh, o.fp, options, path, err); break;
+        case FEMLOD_FORMAT_MEDIT: s = fl_write_medit(mesh, o.fp, path, err); break;
+        default: s = fl_write_gltf(mesh, o.fp, binary, options, path, err); break;
+        }
         if (s != FEMLOD_OK) {
             fl_out_abort(&o);
             return s;
         }
         return fl_out_commit(&o, err);
     }
-    errno = 0;
     switch (f) {
     case FEMLOD_FORMAT_OBJ: s = fl_write_obj(mesh, o.fp); break;
     case FEMLOD_FORMAT_STL:
@@ -187,9 +228,7 @@ femlod_status femlod_mesh_write(const femlod_mesh *mesh, const char *path,
     case FEMLOD_FORMAT_PLY:
     case FEMLOD_FORMAT_PLY_BINARY: s = fl_write_ply(mesh, o.fp, 1); break;
     case FEMLOD_FORMAT_PLY_ASCII: s = fl_write_ply(mesh, o.fp, 0); break;
-    case FEMLOD_FORMAT_GLTF:
-    case FEMLOD_FORMAT_GLB: /* written above */
-    case FEMLOD_FORMAT_AUTO: s = FEMLOD_EINPUT; break;
+    default: /* written above */ s = FEMLOD_EINPUT; break;
     }
     if (s != FEMLOD_OK) {
         int e = errno; /* fl_out_abort's fclose/unlink may change it */
@@ -238,6 +277,141 @@ int fl_io_coord(const char *s, size_t n, double *out, char *why, size_t why_size
     }
     *out = x;
     return 1;
+}
+
+/* }====== */
+
+/* {====== token reader and number output for the FE formats */
+
+void fl_text_init(fl_text *t, const char *data, size_t size, const char *name, char comment,
+                  femlod_error *err) {
+    if (size >= 3 && memcmp(data, "\xEF\xBB\xBF", 3) == 0) {
+        data += 3;
+        size -= 3;
+    }
+    t->p = t->start = data;
+    t->end = data + size;
+    t->name = name;
+    t->line = 1;
+    t->err = err;
+    t->eof = 0;
+    t->comment = comment;
+}
+
+static int text_space(char c) { return c == ' ' || (c >= '\t' && c <= '\r'); }
+
+const char *fl_text_next(fl_text *t, size_t *len) {
+    const char *p = t->p, *end = t->end;
+    for (;;) {
+        while (p < end && text_space(*p) && *p != '\n') p++;
+        if (p == end) break;
+        if (*p == '\n') {
+            t->line++;
+            p++;
+        } else if (t->comment && *p == t->comment) {
+            const char *nl = memchr(p, '\n', (size_t)(end - p));
+            p = nl ? nl : end;
+        } else {
+            const char *s = p;
+            while (p < end && !text_space(*p) && !(t->comment && *p == t->comment)) p++;
+            *len = (size_t)(p - s);
+            t->p = p;
+            return s;
+        }
+    }
+    /* Name the file's last line, not the empty one after its final newline. */
+    if (!t->eof && end > t->start && end[-1] == '\n') t->line--;
+    t->eof = 1;
+    t->p = end;
+    return NULL;
+}
+
+femlod_status fl_text_fail(fl_text *t, femlod_status st, const char *fmt, ...) {
+    char msg[FEMLOD_ERROR_MESSAGE_SIZE];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    return fl_error(t->err, st, "%s:%zu: %s", t->name, t->line, msg);
+}
+
+int fl_text_u64(const char *s, size_t n, uint64_t *v) {
+    if (n == 0) return 0;
+    uint64_t x = 0;
+    for (size_t i = 0; i < n; i++) {
+        if (s[i] < '0' || s[i] > '9') return 0;
+        if (x < (UINT64_C(1) << 60)) x = x * 10 + (uint64_t)(s[i] - '0');
+    }
+    *v = x;
+    return 1;
+}
+
+int fl_text_is(const char *s, size_t n, const char *word) {
+    size_t k = strlen(word);
+    return n == k && memcmp(s, word, k) == 0;
+}
+
+femlod_status fl_io_boundary_sides(const femlod_mesh *m, uint32_t **sides, size_t *count,
+                                   femlod_error *err) {
+    fl_adjacency adj;
+    femlod_status st = fl_adjacency_build(&adj, m->tri, m->nt, m->nv, err);
+    if (st != FEMLOD_OK) return st;
+    size_t n = 0;
+    for (size_t e = 0; e < adj.ne; e++) n += adj.edge_start[e + 1] - adj.edge_start[e] == 1;
+    uint32_t *out = fl_alloc(2 * n, sizeof *out);
+    if (!out) {
+        fl_adjacency_free(&adj);
+        return fl_error(err, FEMLOD_ENOMEM, "out of memory");
+    }
+    size_t k = 0;
+    for (size_t t = 0; t < m->nt; t++)
+        for (int c = 0; c < 3; c++) {
+            uint32_t e = adj.tri_edges[3 * t + (size_t)c];
+            if (e == UINT32_MAX || adj.edge_start[e + 1] - adj.edge_start[e] != 1) continue;
+            out[2 * k] = m->tri[3 * t + (size_t)c];
+            out[2 * k + 1] = m->tri[3 * t + (size_t)(c + 1) % 3];
+            k++;
+        }
+    fl_adjacency_free(&adj);
+    *sides = out;
+    *count = k;
+    return FEMLOD_OK;
+}
+
+femlod_status fl_io_finish(fl_meshbuf *b, femlod_status st, femlod_mesh **out, const char *name,
+                           femlod_error *err) {
+    if (st == FEMLOD_OK) {
+        femlod_mesh *m = fl_meshbuf_finish(b);
+        if (!m)
+            st = fl_error(err, FEMLOD_ENOMEM, "%s: out of memory", name);
+        else
+            *out = m;
+    }
+    fl_meshbuf_free(b);
+    return st;
+}
+
+femlod_status fl_io_write_error(const char *path, femlod_error *err) {
+    int e = errno;
+    return fl_error(err, FEMLOD_EIO, "%s: cannot write: %s", path, strerror(e ? e : EIO));
+}
+
+int fl_io_put_xyz(FILE *fp, const double *p, const char *sep, const char *end) {
+    char buf[160];
+    size_t n = 0, ls = strlen(sep), le = strlen(end);
+    if (ls > 16 || le > 16) return 0;
+    for (int k = 0; k < 3; k++) {
+        if (k) {
+            memcpy(buf + n, sep, ls);
+            n += ls;
+        }
+        int w = fl_format_double(buf + n, 32, p[k]);
+        if (w < 0) return 0;
+        n += (size_t)w;
+    }
+    memcpy(buf + n, end, le);
+    n += le;
+    return fwrite(buf, 1, n, fp) == n;
 }
 
 /* }====== */

@@ -356,10 +356,13 @@ static const char *pair_string(lua_State *L, int pairs, const char *key) {
 }
 
 static int check_format(const char *key, const char *name) {
-    if (name && femlod_format_from_name(name) == FEMLOD_FORMAT_AUTO)
-        return usage_error("%s: unknown format '%s' (valid: obj, stl, stl_ascii, stl_binary, "
-                           "off, ply, ply_ascii, ply_binary, gltf, glb)",
-                           key, name);
+    if (name && femlod_format_from_name(name) == FEMLOD_FORMAT_AUTO) {
+        char valid[256] = "";
+        size_t n = 0;
+        for (const char *const *f = femlod_format_names(); *f && n + 16 < sizeof valid; f++)
+            n += (size_t)snprintf(valid + n, sizeof valid - n, "%s%s", n ? ", " : "", *f);
+        return usage_error("%s: unknown format '%s' (valid: %s)", key, name, valid);
+    }
     return -1;
 }
 

@@ -36,8 +36,7 @@ femlod_mesh *fl_lmesh_check(lua_State *L, int arg) {
 }
 
 /* The format option: names as femlod_format_name spells them. */
-static const char *const format_names[] = {"obj", "stl", "stl_ascii", "stl_binary", "off",
-                                           "ply", "ply_ascii", "ply_binary", "gltf", "glb", NULL};
+#define format_names (femlod_format_names())
 static const char *const io_keys[] = {"format", NULL};
 
 static femlod_format check_format(lua_State *L, int arg) {
@@ -198,8 +197,10 @@ static int lib_mesh(lua_State *L) {
  * Methods
  * ===================================================================== */
 
-/* save's options: format, and for glTF color_by, normals and extras. */
-static const char *const save_keys[] = {"format", "color_by", "normals", "extras", NULL};
+/* save's options: format, for glTF color_by, normals and extras, for .inp
+ * nsets and elsets. */
+static const char *const save_keys[] = {"format", "color_by", "normals", "extras",
+                                        "nsets",  "elsets",   NULL};
 /* In femlod_color_by order. */
 static const char *const color_names[] = {"none", "stretch", "size", "valence", NULL};
 
@@ -283,6 +284,120 @@ static const char *extras_json(lua_State *L, const fl_opts *o) {
     return lua_tostring(L, -1);
 }
 
+/* nsets / elsets: { NAME = {i, ...} | function } as femlod_index_set[*count]
+ * in a Lua-owned buffer, with the index buffers, left on the stack (nothing
+ * is pushed for an absent key). A function is called as f(x, y, z, i) for
+ * every vertex (nsets) or with the centroid of every triangle (elsets) and
+ * returns true for members. Names are sorted: the output does not depend
+ * on the table's traversal order. */
+static femlod_index_set *read_sets(lua_State *L, const fl_opts *o, const char *key, int elements,
+                                   size_t *count) {
+    *count = 0;
+    int t = fl_opts_push(o, key);
+    if (t == LUA_TNIL) return NULL;
+    int tab = lua_gettop(L);
+    if (t != LUA_TTABLE)
+        fl_opts_error(o, key, lua_pushfstring(L, "table of name = indices or function expected, got %s",
+                                              luaL_typename(L, tab)));
+    size_t n = 0;
+    lua_pushnil(L);
+    while (lua_next(L, tab)) {
+        lua_pop(L, 1);
+        if (lua_type(L, -1) != LUA_TSTRING)
+            fl_opts_error(o, key, lua_pushfstring(L, "set names must be strings, got %s",
+                                                  luaL_typename(L, -1)));
+        n++;
+    }
+    femlod_index_set *sets = (femlod_index_set *)lua_newuserdatauv(L, (n ? n : 1) * sizeof *sets, 0);
+    size_t k = 0;
+    lua_pushnil(L);
+    while (lua_next(L, tab)) {
+        lua_pop(L, 1);
+        sets[k].name = lua_tostring(L, -1); /* kept alive by the option table */
+        sets[k].indices = NULL;
+        sets[k].count = 0;
+        k++;
+    }
+    for (size_t i = 1; i < n; i++) /* insertion sort by name: few sets */
+        for (size_t j = i; j > 0 && strcmp(sets[j - 1].name, sets[j].name) > 0; j--) {
+            femlod_index_set tmp = sets[j];
+            sets[j] = sets[j - 1];
+            sets[j - 1] = tmp;
+        }
+    for (size_t i = 0; i < n; i++) {
+        const femlod_mesh *m = fl_lmesh_check(L, 1);
+        size_t limit = elements ? femlod_mesh_triangle_count(m) : femlod_mesh_vertex_count(m);
+        const char *name = sets[i].name;
+        int v = lua_getfield(L, tab, name);
+        int val = lua_gettop(L);
+        uint32_t *buf;
+        size_t c = 0;
+        if (v == LUA_TTABLE) {
+            lua_Integer len = luaL_len(L, val);
+            if (len < 0 || (lua_Unsigned)len > SIZE_MAX / sizeof *buf)
+                fl_opts_error(o, key, lua_pushfstring(L, "%s: list too long", name));
+            buf = (uint32_t *)lua_newuserdatauv(L, (size_t)(len ? len : 1) * sizeof *buf, 0);
+            for (lua_Integer j = 1; j <= len; j++) {
+                int isint = 0;
+                lua_geti(L, val, j);
+                lua_Integer x = lua_tointegerx(L, -1, &isint);
+                if (!isint)
+                    fl_opts_error(o, key, lua_pushfstring(L, "%s[%I]: integer index expected, got %s",
+                                                          name, j, luaL_typename(L, -1)));
+                if (x < 1 || (lua_Unsigned)x > limit)
+                    fl_opts_error(o, key, lua_pushfstring(L, "%s[%I]: index %I out of range (1..%I)",
+                                                          name, j, x, (lua_Integer)limit));
+                lua_pop(L, 1);
+                buf[c++] = (uint32_t)(x - 1);
+            }
+        } else if (v == LUA_TFUNCTION) {
+            buf = (uint32_t *)lua_newuserdatauv(L, (limit ? limit : 1) * sizeof *buf, 0);
+            luaL_checkstack(L, 6, NULL);
+            for (size_t j = 0; j < limit; j++) {
+                m = fl_lmesh_check(L, 1); /* the function may close it */
+                if (j >= (elements ? femlod_mesh_triangle_count(m) : femlod_mesh_vertex_count(m)))
+                    break;
+                const double *pos = femlod_mesh_positions(m);
+                double p[3];
+                if (elements) {
+                    const uint32_t *tr = femlod_mesh_triangles(m) + 3 * j;
+                    for (int d = 0; d < 3; d++)
+                        p[d] = (pos[3 * (size_t)tr[0] + d] + pos[3 * (size_t)tr[1] + d] +
+                                pos[3 * (size_t)tr[2] + d]) / 3;
+                } else {
+                    for (int d = 0; d < 3; d++) p[d] = pos[3 * j + d];
+                }
+                lua_pushvalue(L, val);
+                lua_pushnumber(L, p[0]);
+                lua_pushnumber(L, p[1]);
+                lua_pushnumber(L, p[2]);
+                lua_pushinteger(L, (lua_Integer)j + 1);
+                lua_call(L, 4, 1);
+                int r = lua_type(L, -1);
+                if (r == LUA_TBOOLEAN) {
+                    if (lua_toboolean(L, -1)) buf[c++] = (uint32_t)j;
+                } else if (r != LUA_TNIL) {
+                    fl_opts_error(o, key, lua_pushfstring(L, "%s: function returned %s for %s %I "
+                                                             "(boolean or nil expected)",
+                                                          name, luaL_typename(L, -1),
+                                                          elements ? "triangle" : "vertex",
+                                                          (lua_Integer)j + 1));
+                }
+                lua_pop(L, 1);
+            }
+        } else {
+            fl_opts_error(o, key, lua_pushfstring(L, "%s: list of indices or function expected, got %s",
+                                                  name, luaL_typename(L, val)));
+            return NULL;
+        }
+        /* The value and its buffer stay on the stack until the write. */
+        sets[i].indices = buf;
+        sets[i].count = c;
+    }
+    *count = n;
+    return sets;
+}
+
 static int mesh_save(lua_State *L) {
     const femlod_mesh *m = fl_lmesh_check(L, 1);
     const char *path = check_path(L, 2);
@@ -294,6 +409,9 @@ static int mesh_save(lua_State *L) {
     opts.color_by = (femlod_color_by)fl_opts_enum(&o, "color_by", color_names, 0);
     opts.normals = fl_opts_boolean(&o, "normals", 0);
     if (fl_opts_push(&o, "extras") != LUA_TNIL) opts.extras = extras_json(L, &o);
+    opts.node_sets = read_sets(L, &o, "nsets", 0, &opts.node_set_count);
+    opts.element_sets = read_sets(L, &o, "elsets", 1, &opts.element_set_count);
+    m = fl_lmesh_check(L, 1); /* a set function may have closed it */
     femlod_error err;
     if (femlod_mesh_write(m, path, &opts, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
     return 0;

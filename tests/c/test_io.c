@@ -138,9 +138,14 @@ static void test_format_names(void) {
     static const femlod_format all[] = {
         FEMLOD_FORMAT_OBJ, FEMLOD_FORMAT_STL, FEMLOD_FORMAT_STL_ASCII, FEMLOD_FORMAT_STL_BINARY,
         FEMLOD_FORMAT_OFF, FEMLOD_FORMAT_PLY, FEMLOD_FORMAT_PLY_ASCII, FEMLOD_FORMAT_PLY_BINARY,
-        FEMLOD_FORMAT_GLTF, FEMLOD_FORMAT_GLB};
-    for (size_t i = 0; i < sizeof all / sizeof all[0]; i++)
+        FEMLOD_FORMAT_GLTF, FEMLOD_FORMAT_GLB, FEMLOD_FORMAT_MSH, FEMLOD_FORMAT_MSH2,
+        FEMLOD_FORMAT_VTK, FEMLOD_FORMAT_INP, FEMLOD_FORMAT_MEDIT};
+    const char *const *names = femlod_format_names();
+    for (size_t i = 0; i < sizeof all / sizeof all[0]; i++) {
         CHECK(femlod_format_from_name(femlod_format_name(all[i])) == all[i]);
+        CHECK(names[i] && strcmp(names[i], femlod_format_name(all[i])) == 0);
+    }
+    CHECK(names[sizeof all / sizeof all[0]] == NULL);
     CHECK(strcmp(femlod_format_name(FEMLOD_FORMAT_STL_ASCII), "stl_ascii") == 0);
     CHECK(strcmp(femlod_format_name(FEMLOD_FORMAT_PLY_BINARY), "ply_binary") == 0);
     CHECK(femlod_format_from_name("gltf2") == FEMLOD_FORMAT_AUTO);
@@ -152,14 +157,19 @@ static void test_format_names(void) {
     CHECK(femlod_format_from_path("dir.obj/file") == FEMLOD_FORMAT_AUTO);
     CHECK(femlod_format_from_path("file") == FEMLOD_FORMAT_AUTO);
     CHECK(femlod_format_from_path("file.objx") == FEMLOD_FORMAT_AUTO);
-    CHECK(femlod_format_from_path("mesh.msh") == FEMLOD_FORMAT_AUTO);
+    CHECK(femlod_format_from_path("mesh.msh") == FEMLOD_FORMAT_MSH);
+    CHECK(femlod_format_from_path("a.VTK") == FEMLOD_FORMAT_VTK);
+    CHECK(femlod_format_from_path("deck.inp") == FEMLOD_FORMAT_INP);
+    CHECK(femlod_format_from_path("surf.mesh") == FEMLOD_FORMAT_MEDIT);
+    CHECK(femlod_format_from_path("surf.smesh") == FEMLOD_FORMAT_AUTO);
 
     femlod_error err = {0, ""};
     femlod_mesh *m = NULL;
     CHECK(femlod_mesh_read(&m, "nowhere/mesh.xyz", NULL, &err) == FEMLOD_EINPUT);
     CHECK(m == NULL);
     CHECK_STR_HAS(err.message,
-                  "mesh.xyz: unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb");
+                  "mesh.xyz: unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb, "
+                  ".msh, .vtk, .inp, .mesh (or give the format)");
     CHECK(femlod_mesh_read_memory(&m, "v 0 0 0", 7, NULL, NULL, &err) == FEMLOD_EINPUT);
     CHECK_STR_HAS(err.message, "(memory): unknown file extension");
     /* A name with a known extension is enough for memory reads. */
@@ -733,6 +743,66 @@ static const bad_case bad_cases[] = {
     {"empty.ply", FEMLOD_EPARSE, ": empty file"},
     {"no_vertex_indices.ply", FEMLOD_EPARSE, ":7: element 'face' has no property 'vertex_indices'"},
     {"trailing.ply", FEMLOD_EPARSE, ": byte 269: 2 bytes after the last element"},
+    /* MSH (docs/formats.md "Gmsh MSH") */
+    {"msh_no_endnodes.msh", FEMLOD_EPARSE,
+     ":15: expected '$EndNodes' after 1 node blocks, found '$Elements'"},
+    {"msh_tag_range.msh", FEMLOD_EPARSE, ":20: node tag 9 out of range (nodes 1..4)"},
+    {"msh_tag_undefined.msh", FEMLOD_EPARSE,
+     ":14: node tag 7 is not defined (4 nodes with tags 1..12)"},
+    {"msh_truncated.msh", FEMLOD_EPARSE, ":13: file ends inside the coordinates of node 3"},
+    {"msh_node_count_long.msh", FEMLOD_EPARSE, ":10: '$EndNodes' after 4 of 5 nodes"},
+    {"msh_node_count_short.msh", FEMLOD_EPARSE, ":9: expected '$EndNodes' after 3 nodes, found '4'"},
+    {"msh_huge_nodes_limit.msh", FEMLOD_ELIMIT, ":5: 5000000000 nodes declared (limit 4294967295)"},
+    {"msh_huge_nodes.msh", FEMLOD_EPARSE, ":9: '$EndNodes' after 3 of 3000000000 nodes"},
+    {"msh_huge_elements.msh", FEMLOD_EPARSE,
+     ":21: '$EndElements' where the element tag was expected (a count promises more data)"},
+    {"msh_block_sum.msh", FEMLOD_EPARSE, ":12: header declares 4 nodes, its 1 blocks hold 3"},
+    {"msh_block_exceeds.msh", FEMLOD_EPARSE,
+     ":13: node block 2 holds 2 nodes, more than the 1 left of the header's 4"},
+    {"msh_tag_outside_header.msh", FEMLOD_EPARSE, ":9: node tag 7 outside the header's range 1..4"},
+    {"msh_duplicate_tag.msh", FEMLOD_EPARSE, ":9: node tag 2 is defined twice (first on line 7)"},
+    {"msh_quad.msh", FEMLOD_EUNSUPPORTED,
+     ":18: element type 3 (4-node quadrangle) is not supported: the surface must be 3-node "
+     "triangles (type 2)"},
+    {"msh_tets_only.msh", FEMLOD_EUNSUPPORTED,
+     ":14: no triangles: all 1 elements are of other dimensions (the first is type 4, 4-node "
+     "tetrahedron)"},
+    {"msh_binary_header.msh", FEMLOD_EPARSE, ": byte 20: the byte-order integer is not 1"},
+    {"msh_version3.msh", FEMLOD_EUNSUPPORTED, ":2: MSH version '3.0' is not supported"},
+    {"msh_version1.msh", FEMLOD_EUNSUPPORTED, ":1: MSH version 1 is not supported"},
+    {"msh_no_meshformat.msh", FEMLOD_EPARSE, ":1: expected '$MeshFormat', found '$Nodes'"},
+    {"msh_unknown_type.msh", FEMLOD_EUNSUPPORTED, ":13: unknown element type 99"},
+    {"msh_nan.msh", FEMLOD_EPARSE, ":7: coordinate 'nan' is not finite"},
+    {"msh_unclosed_section.msh", FEMLOD_EPARSE,
+     ":24: section '$PhysicalNames' (line 4) has no '$EndPhysicalNames'"},
+    {"msh_elements_before_nodes.msh", FEMLOD_EPARSE, ":4: '$Elements' before '$Nodes'"},
+    {"msh_no_elements.msh", FEMLOD_EPARSE, ":15: no '$Elements' section"},
+    {"msh_empty.msh", FEMLOD_EPARSE, ": empty file"},
+    {"msh_tag_zero.msh", FEMLOD_EPARSE, ":6: node tag 0 is invalid (tags start at 1)"},
+    {"msh_wrong_dim.msh", FEMLOD_EPARSE,
+     ":18: element block 1: type 2 (3-node triangle) in an entity of dimension 1"},
+    {"msh_no_endelements.msh", FEMLOD_EPARSE,
+     ":20: file ends before '$EndElements' (after 1 element blocks)"},
+    {"msh_short_element.msh", FEMLOD_EPARSE,
+     ":15: '$EndElements' inside an element (too few node tags)"},
+    {"msh_bin_truncated.msh", FEMLOD_EPARSE,
+     ": byte 2017: nodes: 14 records of 32 bytes, only 38 bytes are left"},
+    {"msh_bin_tag_undefined.msh", FEMLOD_EPARSE,
+     ": byte 1156: node tag 999 is not defined (14 nodes with tags 1..14)"},
+    /* Medit */
+    {"medit_after_end.mesh", FEMLOD_EPARSE, ":9: data after 'End': 'Vertices'"},
+    {"medit_dim2.mesh", FEMLOD_EUNSUPPORTED, ":2: Dimension 2 (only 3 is read)"},
+    {"medit_empty.mesh", FEMLOD_EPARSE, ": empty file"},
+    {"medit_huge.mesh", FEMLOD_EPARSE, ":4: 4000000000 vertices declared, but only 13 bytes follow"},
+    {"medit_index_range.mesh", FEMLOD_EPARSE, ":10: vertex index 4 out of range (1..3)"},
+    {"medit_inf.mesh", FEMLOD_EPARSE, ":6: coordinate 'inf' is not finite"},
+    {"medit_no_end.mesh", FEMLOD_EPARSE, ":10: file ends without 'End'"},
+    {"medit_no_version.mesh", FEMLOD_EPARSE,
+     ":1: expected 'MeshVersionFormatted', found 'Dimension'"},
+    {"medit_quads.mesh", FEMLOD_EUNSUPPORTED,
+     ":8: Quadrilaterals are not supported: the surface must be triangles"},
+    {"medit_truncated.mesh", FEMLOD_EPARSE, ":11: file ends inside triangle 2"},
+    {"medit_unknown_keyword.mesh", FEMLOD_EUNSUPPORTED, ":8: unknown keyword 'Triangle'"},
 };
 
 static void test_bad_files(void) {
@@ -809,10 +879,13 @@ static void test_round_trips(void) {
     femlod_mesh *a = awkward_mesh();
     CHECK(a && mesh_valid(a));
     if (!a) return;
-    static const femlod_format exact[] = {FEMLOD_FORMAT_OBJ, FEMLOD_FORMAT_OFF,
-                                          FEMLOD_FORMAT_PLY_ASCII, FEMLOD_FORMAT_PLY_BINARY};
-    static const char *const names[] = {"rt.obj", "rt.off", "rt_ascii.ply", "rt_binary.ply"};
-    for (size_t i = 0; i < 4; i++) {
+    static const femlod_format exact[] = {FEMLOD_FORMAT_OBJ,        FEMLOD_FORMAT_OFF,
+                                          FEMLOD_FORMAT_PLY_ASCII,  FEMLOD_FORMAT_PLY_BINARY,
+                                          FEMLOD_FORMAT_MSH,        FEMLOD_FORMAT_MSH2,
+                                          FEMLOD_FORMAT_MEDIT};
+    static const char *const names[] = {"rt.obj",  "rt.off",  "rt_ascii.ply", "rt_binary.ply",
+                                        "rt.msh", "rt2.msh", "rt.mesh"};
+    for (size_t i = 0; i < sizeof exact / sizeof exact[0]; i++) {
         path_in(p, sizeof p, scratch, names[i]);
         if (!write_ok(a, p, exact[i])) continue;
         femlod_mesh *b = read_ok(p, FEMLOD_FORMAT_AUTO);
@@ -1153,7 +1226,8 @@ static void test_torture(void) {
         "quads.obj",         "crlf_continuation.obj",    "tetra_ascii.stl",
         "solid_header.stl",  "tetra_bom_two_solids.stl", "tetra.off",
         "square_colors.off", "ascii_extra.ply",          "binary_le.ply",
-        "binary_be.ply"};
+        "binary_be.ply",     "gmsh_box41.msh",           "gmsh_box22.msh",
+        "gmsh_box41_bin.msh", "gmsh_box22_bin.msh",      "medit_sections.mesh"};
     char p[600];
     for (size_t i = 0; i < sizeof files / sizeof files[0]; i++) {
         char *data;

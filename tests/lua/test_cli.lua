@@ -78,7 +78,7 @@ usage("femlod: expected name=value, got '=3'", "-e", "", "=3")
 usage("femlod: parameter given twice: 'a=2'", "-e", "", "a=1", "a=2")
 usage("femlod: unknown parameter 'bogus' (valid: format, reference, report)", "info", "x.obj", "bogus=1")
 usage("femlod: report: unknown report 'xml' (valid: text, row, fields)", "info", "x.obj", "report=xml")
-usage("femlod: format: unknown format 'xyz' (valid: obj, stl, stl_ascii, stl_binary, off, ply, ply_ascii, ply_binary, gltf, glb)",
+usage("femlod: format: unknown format 'xyz' (valid: obj, stl, stl_ascii, stl_binary, off, ply, ply_ascii, ply_binary, gltf, glb, msh, msh2, vtk, inp, medit)",
   "convert", "a.obj", "b.obj", "format=xyz")
 usage("femlod: unknown parameter 'formt' (valid: format, input_format, color_by, normals)", "convert", "a.obj", "b.obj", "formt=obj")
 -- Options come first: after the command they are operands or pairs.
@@ -104,7 +104,7 @@ do
   code, out, err = run("run", p, "unused=1")
   T.eq(code, 1, "load error exit 1")
   -- varargs are the pairs: femlod.load("unused=1") fails with an unknown extension
-  T.eq(err, "femlod: " .. p .. ":2: unused=1: unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb (or give the format)\n",
+  T.eq(err, "femlod: " .. p .. ":2: unused=1: unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb, .msh, .vtk, .inp, .mesh (or give the format)\n",
     "load error names recipe line and file")
 
   -- An error inside a function is placed where it happened; --traceback adds the stack.
@@ -263,14 +263,14 @@ do
   T.eq(code, 0, "info with a reference")
   T.check(out:find("\n  hausdorff   [%d.e+-]+ %("), "info prints the hausdorff line with a reference")
   -- format= reads a file whose extension says nothing.
-  local copy = path("fandisk.mesh")
+  local copy = path("fandisk.surf")
   T.writefile(copy, T.readfile(fandisk))
   code, out = run("info", copy, "format=obj")
   T.eq(code, 0, "info format=obj")
-  T.check(out:find("^cli_fandisk%.mesh: 12946 triangles"), "info format=obj output")
+  T.check(out:find("^cli_fandisk%.surf: 12946 triangles"), "info format=obj output")
   code, out, err = run("info", copy)
   T.eq(code, 1, "info of an unknown extension fails")
-  T.eq(err, "femlod: " .. copy .. ": unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb (or give the format)\n",
+  T.eq(err, "femlod: " .. copy .. ": unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb, .msh, .vtk, .inp, .mesh (or give the format)\n",
     "info error has no recipe position")
   code, out, err = run("info", path("missing.obj"))
   T.eq(code, 1, "info of a missing file")

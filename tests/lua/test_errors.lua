@@ -54,11 +54,11 @@ T.errmsg("code:1: bad argument #2 to 'load' (unexpected number key 1; valid keys
 T.errmsg("code:1: bad argument #2 to 'load' (format: string expected, got number)",
   "femlod.load('a.obj', { format = 1 })")
 T.errmsg("code:1: bad argument #2 to 'load' (format: invalid value 'stlx'; valid values: obj, stl, "
-  .. "stl_ascii, stl_binary, off, ply, ply_ascii, ply_binary, gltf, glb)", "femlod.load('a.obj', { format = 'stlx' })")
-T.errmsg("code:1: bad argument #2 to 'save' (unknown key 'fmt'; valid keys: color_by, extras, format, normals)",
+  .. "stl_ascii, stl_binary, off, ply, ply_ascii, ply_binary, gltf, glb, msh, msh2, vtk, inp, medit)", "femlod.load('a.obj', { format = 'stlx' })")
+T.errmsg("code:1: bad argument #2 to 'save' (unknown key 'fmt'; valid keys: color_by, elsets, extras, format, normals, nsets)",
   "m:save('x.obj', { fmt = 'obj' })", env)
 T.errmsg("code:1: bad argument #2 to 'save' (format: invalid value 'OBJ'; valid values: obj, stl, "
-  .. "stl_ascii, stl_binary, off, ply, ply_ascii, ply_binary, gltf, glb)", "m:save('x.obj', { format = 'OBJ' })", env)
+  .. "stl_ascii, stl_binary, off, ply, ply_ascii, ply_binary, gltf, glb, msh, msh2, vtk, inp, medit)", "m:save('x.obj', { format = 'OBJ' })", env)
 T.errmsg("code:1: bad argument #1 to 'mesh' (unknown key 'position'; valid keys: positions, triangles)",
   "femlod.mesh { position = {} }")
 T.errmsg("code:1: bad argument #1 to 'mesh' (unexpected boolean key true; valid keys: positions, triangles)",
@@ -143,7 +143,7 @@ end
 
 T.errmsg("code:1: " .. path("missing.obj") .. ": cannot open: No such file or directory",
   "femlod.load(p)", { p = path("missing.obj") })
-T.errmsg("code:1: x.xyz: unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb (or give the format)",
+T.errmsg("code:1: x.xyz: unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb, .msh, .vtk, .inp, .mesh (or give the format)",
   "femlod.load('x.xyz')")
 T.errmsg("code:1: " .. tmp .. ": cannot read: Is a directory", "femlod.load(p, { format = 'obj' })", { p = tmp })
 
@@ -202,7 +202,7 @@ do
 end
 
 -- Writing: a failed save raises and leaves nothing behind.
-T.errmsg("code:1: " .. path("out.xyz") .. ": unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb (or give the format)",
+T.errmsg("code:1: " .. path("out.xyz") .. ": unknown file extension; supported: .obj, .stl, .off, .ply, .gltf, .glb, .msh, .vtk, .inp, .mesh (or give the format)",
   "m:save(p)", { m = tri, p = path("out.xyz") })
 T.check(not T.exists(path("out.xyz")), "failed save made no file")
 do

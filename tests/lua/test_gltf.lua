@@ -100,7 +100,7 @@ end
 do
   local m <close> = femlod.mesh { positions = { { 0, 0, 0 }, { 1, 0, 0 }, { 0, 1, 0 } }, triangles = { { 1, 2, 3 } } }
   local env = { m = m, out = path("e.glb"), obj = path("e.obj") }
-  T.errmsg("code:1: bad argument #2 to 'save' (unknown key 'colour_by'; valid keys: color_by, extras, format, normals)",
+  T.errmsg("code:1: bad argument #2 to 'save' (unknown key 'colour_by'; valid keys: color_by, elsets, extras, format, normals, nsets)",
     "m:save(out, { colour_by = 'stretch' })", env)
   T.errmsg("code:1: bad argument #2 to 'save' (color_by: invalid value 'quality'; valid values: none, stretch, size, valence)",
     "m:save(out, { color_by = 'quality' })", env)
