@@ -25,7 +25,9 @@ int fl_lua_raise(lua_State *L, const femlod_error *err) {
     else
         lua_pushstring(L, err->message);
     lua_concat(L, 2);
-    if (err->status == FEMLOD_ELIMIT) {
+    /* Under a memory cap, RLIMIT_AS is what made the core's malloc fail. */
+    fl_lua_guard *g = err->status == FEMLOD_ENOMEM ? fl_lua_guard_get(L) : NULL;
+    if (err->status == FEMLOD_ELIMIT || (g && g->memory_capped)) {
         lua_pushvalue(L, -1);
         lua_setfield(L, LUA_REGISTRYINDEX, LIMIT_KEY);
     }
@@ -43,6 +45,52 @@ int fl_lua_is_limit_error(lua_State *L, const char *msg) {
     lua_pop(L, 1);
     return hit;
 }
+
+int fl_lua_raise_limit(lua_State *L, int level, const char *msg) {
+    luaL_where(L, level);
+    lua_pushstring(L, msg);
+    lua_concat(L, 2);
+    lua_pushvalue(L, -1);
+    lua_setfield(L, LUA_REGISTRYINDEX, LIMIT_KEY);
+    return lua_error(L);
+}
+
+/* {====================================================================
+ * The guard
+ * ===================================================================== */
+
+fl_lua_guard *fl_lua_guard_get(lua_State *L) {
+    lua_getfield(L, LUA_REGISTRYINDEX, FL_GUARD_KEY);
+    fl_lua_guard *g = (fl_lua_guard *)lua_touserdata(L, -1);
+    lua_pop(L, 1);
+    return g;
+}
+
+const char *fl_lua_check_path(lua_State *L, int arg, int write) {
+    size_t len;
+    const char *path = luaL_checklstring(L, arg, &len);
+    /* A zero byte would silently cut the path short in the C library. */
+    luaL_argcheck(L, strlen(path) == len, arg, "path contains a zero byte");
+    fl_lua_guard *g = fl_lua_guard_get(L);
+    const char *why = g ? g->check_path(g, path, write) : NULL;
+    if (why) luaL_error(L, "%s", why);
+    return path;
+}
+
+void fl_lua_charge(lua_State *L, double bytes) {
+    fl_lua_guard *g = fl_lua_guard_get(L);
+    if (g && g->charge(g, bytes) && bytes > 0) fl_lua_raise_limit(L, 1, g->memory_message);
+}
+
+void fl_lua_reserve(lua_State *L, double bytes) {
+    fl_lua_guard *g = fl_lua_guard_get(L);
+    if (!g) return;
+    int over = g->charge(g, bytes);
+    g->charge(g, -bytes);
+    if (over) fl_lua_raise_limit(L, 1, g->memory_message);
+}
+
+/* }==================================================================== */
 
 /* {====================================================================
  * Embedded helpers
