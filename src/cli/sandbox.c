@@ -188,26 +188,30 @@ const char *fl_sandbox_max_time(fl_sandbox *sb, const char *value) {
     return NULL;
 }
 
-/* No allocation, no Lua: called from the core through progress callbacks. */
-static int guard_expired(fl_lua_guard *g) {
+static void time_hook(lua_State *L, lua_Debug *ar);
+
+/* No allocation, no error: called from the core through progress callbacks.
+ * Once tripped, the hook fires at every instruction of L (and of every
+ * coroutine, which re-arms its own), so a pcall that caught the stop is
+ * stopped at its next instruction. */
+static int guard_expired(fl_lua_guard *g, lua_State *L) {
     fl_sandbox *sb = (fl_sandbox *)g;
     if (sb->max_time <= 0 || sb->cap_lifted) return 0;
-    if (sb->expired) return 1;
-    struct timespec now;
-    clock_gettime(CLOCK_MONOTONIC, &now);
-    if (now.tv_sec > sb->deadline.tv_sec ||
-        (now.tv_sec == sb->deadline.tv_sec && now.tv_nsec >= sb->deadline.tv_nsec))
+    if (!sb->expired) {
+        struct timespec now;
+        clock_gettime(CLOCK_MONOTONIC, &now);
+        if (now.tv_sec < sb->deadline.tv_sec ||
+            (now.tv_sec == sb->deadline.tv_sec && now.tv_nsec < sb->deadline.tv_nsec))
+            return 0;
         sb->expired = 1;
-    return sb->expired;
+    }
+    if (L) lua_sethook(L, time_hook, LUA_MASKCOUNT, 1);
+    return 1;
 }
 
-/* Once tripped, fires at every instruction of every coroutine (new ones
- * inherit the hook), so a pcall that caught the stop is stopped at once. */
 static void time_hook(lua_State *L, lua_Debug *ar) {
     (void)ar;
-    if (!guard_expired(&the_sandbox.guard)) return;
-    lua_sethook(L, time_hook, LUA_MASKCOUNT, 1);
-    fl_lua_raise_limit(L, 0, the_sandbox.time_message);
+    if (guard_expired(&the_sandbox.guard, L)) fl_lua_raise_limit(L, 0, the_sandbox.time_message);
 }
 
 static void backstop(int sig) {
@@ -220,6 +224,8 @@ static void backstop(int sig) {
     _exit(3);
 }
 
+static int guarded_xpcall(lua_State *L);
+
 static void start_clock(fl_sandbox *sb, lua_State *L) {
     clock_gettime(CLOCK_MONOTONIC, &sb->deadline);
     double whole = floor(sb->max_time);
@@ -230,6 +236,9 @@ static void start_clock(fl_sandbox *sb, lua_State *L) {
         sb->deadline.tv_nsec -= 1000000000L;
     }
     lua_sethook(L, time_hook, LUA_MASKCOUNT, HOOK_COUNT);
+    lua_getglobal(L, "xpcall");
+    lua_pushcclosure(L, guarded_xpcall, 1);
+    lua_setglobal(L, "xpcall");
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
     sa.sa_handler = backstop;
@@ -401,6 +410,37 @@ static int wrapped(lua_State *L) {
     return lua_gettop(L);
 }
 
+/* After a trip, the message handler of an xpcall runs inside the hook that
+ * raised, where no hook fires: a handler that loops would never stop. So
+ * once the time is up the handler is skipped and the message kept. */
+static int guarded_handler(lua_State *L) {
+    if (the_sandbox.expired) return 1;
+    int n = lua_gettop(L);
+    lua_pushvalue(L, lua_upvalueindex(1));
+    lua_insert(L, 1);
+    lua_call(L, n, LUA_MULTRET);
+    return lua_gettop(L);
+}
+
+static int finish_call(lua_State *L, int status, lua_KContext ctx) {
+    (void)status;
+    (void)ctx;
+    return lua_gettop(L);
+}
+
+static int guarded_xpcall(lua_State *L) {
+    luaL_checktype(L, 2, LUA_TFUNCTION);
+    lua_pushvalue(L, 2);
+    lua_pushcclosure(L, guarded_handler, 1);
+    lua_replace(L, 2);
+    int n = lua_gettop(L);
+    lua_pushvalue(L, lua_upvalueindex(1));
+    lua_insert(L, 1);
+    /* With a continuation, so that the function may still yield. */
+    lua_callk(L, n, LUA_MULTRET, 0, finish_call);
+    return finish_call(L, LUA_OK, 0);
+}
+
 /* Replaces table[name] (table on the top) with its wrapped version. */
 static void wrap_field(lua_State *L, const char *name, enum wrap kind) {
     lua_getfield(L, -1, name);
@@ -416,14 +456,21 @@ static void remove_fields(lua_State *L, const char *const names[]) {
     }
 }
 
+static int finish_dofile(lua_State *L, int status, lua_KContext ctx) {
+    (void)status;
+    (void)ctx;
+    return lua_gettop(L) - 1;
+}
+
 /* dofile, text only. */
 static int sandbox_dofile(lua_State *L) {
     const char *name = luaL_optstring(L, 1, NULL);
     lua_settop(L, 1);
     if (name) check(L, name, 0);
-    if (luaL_loadfilex(L, name, "t") != LUA_OK) return lua_error(L);
-    lua_call(L, 0, LUA_MULTRET);
-    return lua_gettop(L) - 1;
+    /* Unlike the stock dofile, a load error gets the caller's position. */
+    if (luaL_loadfilex(L, name, "t") != LUA_OK) return luaL_error(L, "%s", lua_tostring(L, -1));
+    lua_callk(L, 0, LUA_MULTRET, 0, finish_dofile);
+    return finish_dofile(L, LUA_OK, 0);
 }
 
 /* require's searcher for NAME.lua in the recipe's folder (dots become /). */

@@ -77,15 +77,31 @@ const char *fl_lua_check_path(lua_State *L, int arg, int write) {
     return path;
 }
 
+/* Over the cap, a full collection first: the meshes of unreachable boxes
+ * are still charged, and the collector does not know their size. */
+static int over_cap(lua_State *L, fl_lua_guard *g) {
+    if (!g->charge(g, 0)) return 0;
+    lua_gc(L, LUA_GCCOLLECT);
+    return g->charge(g, 0);
+}
+
 void fl_lua_charge(lua_State *L, double bytes) {
     fl_lua_guard *g = fl_lua_guard_get(L);
-    if (g && g->charge(g, bytes) && bytes > 0) fl_lua_raise_limit(L, 1, g->memory_message);
+    if (!g) return;
+    int over = g->charge(g, bytes);
+    if (bytes <= 0) return;
+    if (over && over_cap(L, g)) fl_lua_raise_limit(L, 1, g->memory_message);
+    /* Pace the collector as if the bytes were Lua's: otherwise it sees a
+     * few bytes of box per mesh, and dropped meshes pile up until the
+     * allocator refuses (its emergency collection runs no finalizer). */
+    if (g->memory_capped) lua_gc(L, LUA_GCSTEP, bytes > 1e9 ? 1000000 : (int)(bytes / 1024));
 }
 
 void fl_lua_reserve(lua_State *L, double bytes) {
     fl_lua_guard *g = fl_lua_guard_get(L);
     if (!g) return;
     int over = g->charge(g, bytes);
+    if (over) over = over_cap(L, g);
     g->charge(g, -bytes);
     if (over) fl_lua_raise_limit(L, 1, g->memory_message);
 }

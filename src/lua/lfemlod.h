@@ -70,8 +70,10 @@ struct fl_lua_guard {
      * the cap; returns nonzero when the total now passes it. Must not raise. */
     int (*charge)(fl_lua_guard *g, double bytes);
     /* Nonzero once the time cap has passed; polled by long C calls through
-     * their progress callbacks. Must not raise or allocate. */
-    int (*expired)(fl_lua_guard *g);
+     * their progress callbacks, with the thread that called them, on which
+     * it then arms the hook that stops every later instruction (so that the
+     * stop cannot be caught). Must not raise or allocate. */
+    int (*expired)(fl_lua_guard *g, lua_State *L);
     /* The message of each cap ("time limit of 2 s exceeded (--max-time)"). */
     const char *time_message, *memory_message;
     /* Nonzero when a memory cap is in force: the core's FEMLOD_ENOMEM then

@@ -266,7 +266,7 @@ static int call_progress(void *payload, double done) {
     progress_call *pc = (progress_call *)payload;
     lua_State *L = pc->L;
     if (pc->failed != PROGRESS_OK) return 1;
-    if (pc->guard && pc->guard->expired(pc->guard)) {
+    if (pc->guard && pc->guard->expired(pc->guard, L)) {
         pc->failed = PROGRESS_LIMIT;
         return 1;
     }
