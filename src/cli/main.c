@@ -149,7 +149,7 @@ static int sandbox_option(cli *c, int *i) {
         const char *msg = k == 0 ? fl_sandbox_allow(sb, v)
                         : k == 1 ? fl_sandbox_max_memory(sb, v)
                                  : fl_sandbox_max_time(sb, v);
-        if (msg) return usage_error("%s '%s'", msg, v);
+        if (msg) return k == 0 ? usage_error("%s", msg) : usage_error("%s '%s'", msg, v);
         return -1;
     }
     return -2;

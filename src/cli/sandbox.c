@@ -273,11 +273,11 @@ static char *parent_realpath(const char *path) {
 }
 
 const char *fl_sandbox_allow(fl_sandbox *sb, const char *dir) {
-    static char msg[128];
+    static char msg[PATH_MAX + 64];
     char *real = realpath(dir, NULL);
     struct stat st;
     if (!real || stat(real, &st) != 0 || !S_ISDIR(st.st_mode)) {
-        snprintf(msg, sizeof msg, "--allow: %s", real ? strerror(ENOTDIR) : strerror(errno));
+        snprintf(msg, sizeof msg, "--allow: %s: %s", dir, real ? strerror(ENOTDIR) : strerror(errno));
         free(real);
         return msg;
     }

@@ -307,8 +307,8 @@ local function usage(first, ...)
   T.eq(out, "", "nothing on stdout")
   T.eq(err:match("^[^\n]*"), first, "message for: " .. table.concat({ ... }, " "))
 end
-usage("femlod: --allow: No such file or directory 'nothere'", "run", "--sandbox", "--allow", "nothere", "x.lua")
-usage("femlod: --allow: Not a directory 'recipes/notes.txt'", "run", "--sandbox", "--allow", "recipes/notes.txt", "x.lua")
+usage("femlod: --allow: nothere: No such file or directory", "run", "--sandbox", "--allow", "nothere", "x.lua")
+usage("femlod: --allow: recipes/notes.txt: Not a directory", "run", "--sandbox", "--allow", "recipes/notes.txt", "x.lua")
 usage("femlod: --allow needs a value", "run", "--sandbox", "--allow")
 usage("femlod: --allow needs --sandbox", "run", "--allow", "allowed", "x.lua")
 usage("femlod: --max-memory: size of at least 64K expected (a number with K, M or G), got '12Q'",
