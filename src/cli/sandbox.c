@@ -140,6 +140,7 @@ const char *fl_sandbox_max_memory(fl_sandbox *sb, const char *value) {
     return NULL;
 }
 
+#ifndef FL_ASAN
 /* The address space in use now, from /proc/self/statm; 0 when unknown. */
 static double address_space(void) {
     FILE *f = fopen("/proc/self/statm", "r");
@@ -150,6 +151,7 @@ static double address_space(void) {
     long page = sysconf(_SC_PAGESIZE);
     return ok && page > 0 ? (double)pages * (double)page : 0;
 }
+#endif
 
 /* RLIMIT_AS for what passes neither the allocator nor the charges; not under
  * ASan, whose shadow memory is terabytes of address space. */

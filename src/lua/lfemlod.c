@@ -24,9 +24,15 @@ int fl_lua_raise(lua_State *L, const femlod_error *err) {
         lua_pushfstring(L, "femlod: %s error", femlod_status_name(err->status));
     else
         lua_pushstring(L, err->message);
-    lua_concat(L, 2);
     /* Under a memory cap, RLIMIT_AS is what made the core's malloc fail. */
     fl_lua_guard *g = err->status == FEMLOD_ENOMEM ? fl_lua_guard_get(L) : NULL;
+    if (g && g->memory_capped) {
+        lua_pushliteral(L, "; ");
+        lua_pushstring(L, g->memory_message);
+        lua_concat(L, 4);
+    } else {
+        lua_concat(L, 2);
+    }
     if (err->status == FEMLOD_ELIMIT || (g && g->memory_capped)) {
         lua_pushvalue(L, -1);
         lua_setfield(L, LUA_REGISTRYINDEX, LIMIT_KEY);

@@ -284,7 +284,7 @@ if FEMLOD then
   local LOST = tmp .. "/lost"
   os.execute("chmod -R u+w " .. quote(LOST) .. " 2>/dev/null; rm -rf " .. quote(LOST))
   assert(os.execute("mkdir -p " .. quote(LOST)))
-  local mesh = P.shared .. "/fandisk.obj" -- every output of it is over 8 KiB
+  local mesh = P.shared .. "/spider_binary.stl" -- every output of it is over 2 KiB
   -- A hierarchy for lod, made in a good folder.
   local flh = LOST .. "/good.flh"
   local code, _, err = spawn(LOST, nil, "simplify", mesh, LOST .. "/good.obj", "--ratio", "0.5", "--hierarchy", flh)
@@ -375,7 +375,7 @@ end
 
   -- A full disk: the file size limit makes write() fail with EFBIG (SIGXFSZ
   -- ignored), part-way through every output (dash counts 512-byte blocks).
-  case("disk full", LOST .. "/full", "cannot write: File too large", "trap '' XFSZ; ulimit -f 16;")
+  case("disk full", LOST .. "/full", "cannot write: File too large", "trap '' XFSZ; ulimit -f 4;")
   -- A folder the user cannot write: as root, without CAP_DAC_OVERRIDE.
   local root = io.popen("id -u"):read("l") == "0"
   case("read-only folder", LOST .. "/rodir", "cannot create temporary file: Permission denied",
