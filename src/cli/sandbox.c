@@ -24,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/time.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -58,8 +59,9 @@ struct fl_sandbox {
     char cap_text[32];  /* how the user wrote it */
 
     double max_time;    /* --max-time in seconds; 0 for none */
+    lua_State *main;    /* the thread SIGALRM arms */
     struct timespec deadline;
-    volatile sig_atomic_t expired;
+    volatile sig_atomic_t expired, alarmed;
 
     char time_message[96], memory_message[96];
 };
@@ -216,8 +218,20 @@ static void time_hook(lua_State *L, lua_Debug *ar) {
     if (guard_expired(&the_sandbox.guard, L)) fl_lua_raise_limit(L, 0, the_sandbox.time_message);
 }
 
-static void backstop(int sig) {
+/* SIGALRM: the first at the deadline arms the hook of the main thread (as
+ * lua.c's laction does; lua_sethook may be called from a signal handler)
+ * and sets the flag the progress callbacks and coroutines see; the second,
+ * BACKSTOP_SECONDS later, ends the process from here. */
+static void on_alarm(int sig) {
     (void)sig;
+    /* expired may already be set by a look at the clock that came first. */
+    if (!the_sandbox.alarmed) {
+        the_sandbox.alarmed = 1;
+        the_sandbox.expired = 1;
+        lua_sethook(the_sandbox.main, time_hook, LUA_MASKCOUNT, 1);
+        alarm(BACKSTOP_SECONDS);
+        return;
+    }
     static const char pre[] = "femlod: ", post[] = " (stopped inside a C function)\n";
     ssize_t r = write(2, pre, sizeof pre - 1);
     r = write(2, the_sandbox.time_message, strlen(the_sandbox.time_message));
@@ -228,7 +242,33 @@ static void backstop(int sig) {
 
 static int guarded_xpcall(lua_State *L);
 
+/* Coroutines: the signal reaches only the main thread, so each new
+ * coroutine gets a count hook that looks at the clock (every HOOK_COUNT
+ * instructions; a count hook slows the VM for every instruction, so the
+ * main thread has none until the deadline). coroutine.create and
+ * coroutine.wrap (upvalue 1) are wrapped; wrap's function holds its thread
+ * as its upvalue. */
+static int hooked_coroutine(lua_State *L) {
+    int n = lua_gettop(L);
+    lua_pushvalue(L, lua_upvalueindex(1));
+    lua_insert(L, 1);
+    lua_call(L, n, 1);
+    lua_State *co = lua_tothread(L, -1);
+    if (!co && lua_getupvalue(L, -1, 1)) {
+        co = lua_tothread(L, -1);
+        lua_pop(L, 1);
+    }
+    if (co) {
+        if (the_sandbox.expired)
+            lua_sethook(co, time_hook, LUA_MASKCOUNT, 1);
+        else
+            lua_sethook(co, time_hook, LUA_MASKCOUNT, HOOK_COUNT);
+    }
+    return 1;
+}
+
 static void start_clock(fl_sandbox *sb, lua_State *L) {
+    sb->main = L;
     clock_gettime(CLOCK_MONOTONIC, &sb->deadline);
     double whole = floor(sb->max_time);
     sb->deadline.tv_sec += (time_t)whole;
@@ -237,16 +277,32 @@ static void start_clock(fl_sandbox *sb, lua_State *L) {
         sb->deadline.tv_sec++;
         sb->deadline.tv_nsec -= 1000000000L;
     }
-    lua_sethook(L, time_hook, LUA_MASKCOUNT, HOOK_COUNT);
     lua_getglobal(L, "xpcall");
     lua_pushcclosure(L, guarded_xpcall, 1);
     lua_setglobal(L, "xpcall");
+    lua_getglobal(L, "coroutine");
+    if (lua_istable(L, -1)) {
+        static const char *const makers[] = {"create", "wrap"};
+        for (int i = 0; i < 2; i++) {
+            lua_getfield(L, -1, makers[i]);
+            lua_pushcclosure(L, hooked_coroutine, 1);
+            lua_setfield(L, -2, makers[i]);
+        }
+    }
+    lua_pop(L, 1);
+    /* No SA_RESTART: a recipe blocked reading standard input gets EINTR and
+     * meets the hook. Reads and writes of regular files are not interrupted. */
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);
-    sa.sa_handler = backstop;
+    sa.sa_handler = on_alarm;
     sigemptyset(&sa.sa_mask);
     sigaction(SIGALRM, &sa, NULL);
-    alarm((unsigned)ceil(sb->max_time) + BACKSTOP_SECONDS);
+    struct itimerval it;
+    memset(&it, 0, sizeof it);
+    it.it_value.tv_sec = (time_t)whole;
+    it.it_value.tv_usec = (suseconds_t)((sb->max_time - whole) * 1e6);
+    if (it.it_value.tv_sec == 0 && it.it_value.tv_usec == 0) it.it_value.tv_usec = 1;
+    setitimer(ITIMER_REAL, &it, NULL);
 }
 
 /* }==================================================================== */
@@ -570,7 +626,9 @@ void fl_sandbox_start(fl_sandbox *sb, lua_State *L, const char *recipe) {
 const char *fl_sandbox_stop(fl_sandbox *sb, lua_State *L, const char *msg) {
     if (!fl_sandbox_active(sb)) return NULL;
     if (sb->max_time > 0) {
-        alarm(0);
+        struct itimerval off;
+        memset(&off, 0, sizeof off);
+        setitimer(ITIMER_REAL, &off, NULL);
         lua_sethook(L, NULL, 0, 0);
     }
     sb->cap_lifted = 1;

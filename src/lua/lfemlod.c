@@ -45,8 +45,10 @@ int fl_lua_is_limit_error(lua_State *L, const char *msg) {
     if (msg && lua_getfield(L, LUA_REGISTRYINDEX, LIMIT_KEY) == LUA_TSTRING) {
         size_t n;
         const char *limit = lua_tolstring(L, -1, &n);
-        /* The message may have grown a traceback, never a new beginning. */
-        hit = strncmp(msg, limit, n) == 0 && (msg[n] == '\0' || msg[n] == '\n');
+        /* The message may have grown a traceback, and a position in front
+         * (coroutine.wrap adds one when the error leaves the coroutine). */
+        for (const char *p = strstr(msg, limit); p && !hit; p = strstr(p + 1, limit))
+            hit = p[n] == '\0' || p[n] == '\n';
     }
     lua_pop(L, 1);
     return hit;

@@ -48,7 +48,8 @@ FL_LUA_INTERNAL void fl_lua_preload_helpers(lua_State *L);
  * FEMLOD_ELIMIT failure is also recorded, so that the program can tell when
  * a recipe died of it (fl_lua_is_limit_error) and exit with code 3. */
 FL_LUA_INTERNAL int fl_lua_raise(lua_State *L, const femlod_error *err);
-/* True when msg is the last recorded limit failure (a traceback may follow).
+/* True when msg is the last recorded limit failure (a position may come
+ * before it, a traceback after it).
  * A recipe that caught that failure and died of another error gets false. */
 FL_LUA_INTERNAL int fl_lua_is_limit_error(lua_State *L, const char *msg);
 

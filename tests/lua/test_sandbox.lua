@@ -287,6 +287,13 @@ timed("pcall inside the loop", "while true do\n  pcall(function() while true do 
 timed("error handler that retries", "local function spin() while true do end end\n"
   .. "while true do xpcall(spin, function() return spin() end) end\n", 2)
 timed("coroutines", "while true do\n  pcall(coroutine.wrap(function() while true do end end))\nend\n", 2)
+do -- uncaught, through coroutine.wrap, which puts its own position in front
+  local name = recipe("local spin = coroutine.wrap(function()\n  while true do end\nend)\nspin()\n")
+  local st, _, err = run("run", "--sandbox", "--max-time", "1", name)
+  T.eq(st, 3, "coroutine.wrap uncaught: exit 3")
+  T.eq(err, "femlod: " .. name .. ":4: " .. name .. ":2: time limit of 1 s exceeded (--max-time)\n",
+    "coroutine.wrap uncaught: message")
+end
 timed("a long simplify", "local m = femlod.load(" .. "'recipes/fandisk.obj'" .. "):subdivide(1)\n"
   .. "print('simplifying')\nlocal h = m:simplify { target = 4 }\nprint('finished')\n", 3)
 timed("a long simplify inside pcall", "local m = femlod.load(" .. "'recipes/fandisk.obj'" .. "):subdivide(1)\n"
