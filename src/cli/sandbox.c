@@ -56,7 +56,6 @@ struct fl_sandbox {
     size_t used;        /* live bytes of the Lua heap */
     double charged;     /* core bytes charged by the binding */
     int refused;        /* the allocator refused a request under the cap */
-    char cap_text[32];  /* how the user wrote it */
 
     double max_time;    /* --max-time in seconds; 0 for none */
     lua_State *main;    /* the thread SIGALRM arms */
@@ -134,7 +133,6 @@ const char *fl_sandbox_max_memory(fl_sandbox *sb, const char *value) {
     if (end == value || errno || unit == 0 || !(v > 0) || v * unit > 1e18 || v * unit < 65536.0)
         return "--max-memory: size of at least 64K expected (a number with K, M or G), got";
     sb->cap = (size_t)(v * unit);
-    snprintf(sb->cap_text, sizeof sb->cap_text, "%s", value);
     snprintf(sb->memory_message, sizeof sb->memory_message,
              "memory limit of %s exceeded (--max-memory)", value);
     sb->guard.memory_message = sb->memory_message;
