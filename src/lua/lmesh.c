@@ -39,12 +39,12 @@ void fl_lmesh_charge(lua_State *L, femlod_mesh *const *slot) {
 
 void fl_lmesh_release(lua_State *L, femlod_mesh **slot) {
     if (!*slot) return;
-    fl_lua_guard *g = fl_lua_guard_get(L);
-    if (g)
-        g->charge(g, -fl_lmesh_bytes((double)femlod_mesh_vertex_count(*slot),
-                                     (double)femlod_mesh_triangle_count(*slot)));
-    femlod_mesh_free(*slot);
+    double bytes = fl_lmesh_bytes((double)femlod_mesh_vertex_count(*slot),
+                                  (double)femlod_mesh_triangle_count(*slot));
+    femlod_mesh_free(*slot); /* first: the look-up below may raise (memory) */
     *slot = NULL;
+    fl_lua_guard *g = fl_lua_guard_get(L);
+    if (g) g->charge(g, -bytes);
 }
 
 femlod_mesh *fl_lmesh_check(lua_State *L, int arg) {
@@ -64,7 +64,6 @@ static femlod_format check_format(lua_State *L, int arg) {
     int i = fl_opts_enum(&o, "format", format_names, -1);
     return i < 0 ? FEMLOD_FORMAT_AUTO : femlod_format_from_name(format_names[i]);
 }
-
 
 /* {====================================================================
  * Module functions: the constructors
