@@ -150,6 +150,27 @@ femlod_status fl_out_open(fl_out *o, const char *path, femlod_error *err) {
         memcpy(target, path, n);
     }
 
+    /* Refused before anything is made: a folder (rename would fail only
+     * after the whole file was written), and a file without any write
+     * permission bit, which its owner meant to keep (root's rename would
+     * replace it: the bits are checked, not access(), which root passes). */
+    struct stat old;
+    if (stat(target, &old) == 0) {
+        const char *why = NULL;
+        char buf[48];
+        if (S_ISDIR(old.st_mode)) {
+            why = strerror(EISDIR);
+        } else if (S_ISREG(old.st_mode) && (old.st_mode & 0222) == 0) {
+            snprintf(buf, sizeof buf, "file is read-only (mode %04o)",
+                     (unsigned)(old.st_mode & 07777));
+            why = buf;
+        }
+        if (why) {
+            free(target);
+            return fl_error(err, FEMLOD_EIO, "%s: cannot write: %s", path, why);
+        }
+    }
+
     size_t len = strlen(target);
     char *tmp = fl_alloc(len + sizeof suffix, 1);
     if (!tmp) {
@@ -206,6 +227,20 @@ void fl_out_abort(fl_out *o) {
     o->target = NULL;
 }
 
+/* The errno of a write that failed earlier, which the writer only left in
+ * ferror: one more byte at the end of the temporary fails the same way (a
+ * full disk, EFBIG past RLIMIT_FSIZE). EIO when it does not. */
+static int write_errno(FILE *fp) {
+    int fd = fileno(fp);
+    struct stat st;
+    if (fd < 0 || fstat(fd, &st) != 0) return EIO;
+    ssize_t r;
+    do {
+        r = pwrite(fd, "", 1, st.st_size);
+    } while (r < 0 && errno == EINTR);
+    return r < 0 ? errno : EIO;
+}
+
 /* The rename is only durable once the folder entry is on disk too. */
 static int sync_parent_dir(const char *path) {
     const char *slash = strrchr(path, '/');
@@ -241,7 +276,7 @@ femlod_status fl_out_commit(fl_out *o, femlod_error *err) {
     } else if (ferror(fp)) {
         /* A failed fwrite/fprintf earlier; errno may be long gone. */
         what = "cannot write";
-        e = EIO;
+        e = write_errno(fp);
         fclose(fp);
     } else if (fflush(fp) != 0) {
         what = "cannot write";

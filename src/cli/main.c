@@ -11,6 +11,7 @@
  * number printing are locale independent.
  */
 #include "lua/lfemlod.h"
+#include "sandbox.h"
 
 #include <lualib.h>
 
@@ -73,6 +74,12 @@ static void usage_text(FILE *f) {
           "  --seed N         seed math.random with the integer N (default 0: runs repeat)\n"
           "  --quiet          print nothing but what the command is for\n"
           "  --traceback      add a Lua stack traceback to error messages\n"
+          "  --sandbox        run and -e: no os.execute, io.popen, os.remove ...; read\n"
+          "                   only the recipe's folder and --allow folders, write only\n"
+          "                   --allow folders (these four also follow the word run)\n"
+          "  --allow DIR      with --sandbox: let the recipe read and write DIR\n"
+          "  --max-memory SIZE  stop (exit 3) past SIZE bytes (suffix K, M, G)\n"
+          "  --max-time SECONDS stop (exit 3) after SECONDS of wall-clock time\n"
           "  -h, --help       print this help and exit\n"
           "  -v, --version    print the version and exit\n"
           "\n"
@@ -120,6 +127,34 @@ static int parse_seed(lua_State *L, cli *c, const char *s) {
     return EXIT_OK;
 }
 
+/* --sandbox, --allow DIR, --max-memory SIZE, --max-time SECONDS (also
+ * spelled --name=value): returns -2 when argv[*i] is none of them, -1 when
+ * it was taken (with its value), or a usage error's exit status. */
+static int sandbox_option(cli *c, int *i) {
+    static const char *const named[] = {"--allow", "--max-memory", "--max-time"};
+    const char *a = c->argv[*i];
+    fl_sandbox *sb = fl_sandbox_get();
+    if (strcmp(a, "--sandbox") == 0) {
+        fl_sandbox_enable(sb);
+        return -1;
+    }
+    for (int k = 0; k < 3; k++) {
+        size_t n = strlen(named[k]);
+        if (strncmp(a, named[k], n) != 0 || (a[n] != '\0' && a[n] != '=')) continue;
+        const char *v = a + n + 1;
+        if (a[n] == '\0') {
+            if (*i + 1 >= c->argc) return usage_error("%s needs a value", named[k]);
+            v = c->argv[++*i];
+        }
+        const char *msg = k == 0 ? fl_sandbox_allow(sb, v)
+                        : k == 1 ? fl_sandbox_max_memory(sb, v)
+                                 : fl_sandbox_max_time(sb, v);
+        if (msg) return k == 0 ? usage_error("%s", msg) : usage_error("%s '%s'", msg, v);
+        return -1;
+    }
+    return -2;
+}
+
 /* Not a command word: a recipe when it looks like a file name. */
 static int looks_like_recipe(const char *s) {
     size_t n = strlen(s);
@@ -157,7 +192,9 @@ static int parse_args(lua_State *L, cli *c) {
             int st = parse_seed(L, c, a + 7);
             if (st != EXIT_OK) return st;
         } else {
-            return usage_error("unknown option '%s'", a);
+            int st = sandbox_option(c, &i);
+            if (st == -2) return usage_error("unknown option '%s'", a);
+            if (st >= 0) return st;
         }
     }
     if (i >= c->argc) return usage_error("no command given");
@@ -168,6 +205,18 @@ static int parse_args(lua_State *L, cli *c) {
         c->cmd = CMD_EVAL;
     } else if (strcmp(w, "run") == 0) {
         c->cmd = CMD_RUN;
+        /* femlod run --sandbox --allow out RECIPE.lua: the sandbox's options
+         * may follow the word run. */
+        while (i + 1 < c->argc && strncmp(c->argv[i + 1], "--", 2) == 0) {
+            if (strcmp(c->argv[i + 1], "--") == 0) {
+                i++;
+                break;
+            }
+            i++;
+            int st = sandbox_option(c, &i);
+            if (st == -2) return usage_error("unknown option '%s'", c->argv[i]);
+            if (st >= 0) return st;
+        }
     } else if (strcmp(w, "info") == 0) {
         c->cmd = CMD_INFO;
     } else if (strcmp(w, "convert") == 0) {
@@ -198,6 +247,10 @@ static int parse_args(lua_State *L, cli *c) {
         return usage_error("missing %s", what[c->cmd]);
     }
     c->pairs = c->operand + (need ? need : 1);
+    const char *confine = fl_sandbox_confines(fl_sandbox_get());
+    if (confine && c->cmd != CMD_RUN && c->cmd != CMD_EVAL)
+        return usage_error("%s applies to run and -e only", confine);
+    if (confine && strcmp(confine, "--allow") == 0) return usage_error("--allow needs --sandbox");
     c->script = c->cmd == CMD_RUN ? c->operand : 0;
     return -1;
 }
@@ -262,13 +315,16 @@ static int docall(lua_State *L, int narg, int traceback) {
     return status;
 }
 
-/* Prints the error on the top of the stack and gives the exit status. */
+/* Prints the error on the top of the stack and gives the exit status. The
+ * caps are lifted first, so that reporting cannot trip them; Lua's own
+ * memory error under --max-memory is reported as the cap. */
 static int report(lua_State *L) {
     const char *msg = lua_tostring(L, -1);
+    const char *cap = fl_sandbox_stop(fl_sandbox_get(), L, msg);
     fflush(stdout);
-    fprintf(stderr, PROGNAME ": %s\n", msg ? msg : "(error object is not a string)");
+    fprintf(stderr, PROGNAME ": %s\n", cap ? cap : msg ? msg : "(error object is not a string)");
     fflush(stderr);
-    int status = fl_lua_is_limit_error(L, msg) ? EXIT_LIMIT : EXIT_ERROR;
+    int status = cap || fl_lua_is_limit_error(L, msg) ? EXIT_LIMIT : EXIT_ERROR;
     lua_pop(L, 1);
     return status;
 }
@@ -285,7 +341,8 @@ static void set_arg_table(lua_State *L, const cli *c) {
 }
 
 /* Runs a recipe or a line of code with params and arg set, the module in
- * the global `femlod`, and math.random seeded. */
+ * the global `femlod`, math.random seeded, and the sandbox and caps in
+ * force when asked for. */
 static int cmd_lua(lua_State *L, const cli *c) {
     int st = push_pairs(L, c);
     if (st >= 0) return st;
@@ -302,6 +359,8 @@ static int cmd_lua(lua_State *L, const cli *c) {
 
     int status;
     const char *src = c->argv[c->operand];
+    fl_sandbox_start(fl_sandbox_get(), L,
+                     c->cmd == CMD_EVAL || strcmp(src, "-") == 0 ? NULL : src);
     if (c->cmd == CMD_EVAL) {
         status = luaL_loadbufferx(L, src, strlen(src), "=(command line)", "t");
     } else {
@@ -842,6 +901,9 @@ static int pmain(lua_State *L) {
     int st = parse_args(L, &c);
     if (st < 0) {
         luaL_openlibs(L);
+        /* Caps alone apply to every command; run and -e start them later,
+         * with the sandbox, once the recipe's folder is known. */
+        if (c.cmd != CMD_RUN && c.cmd != CMD_EVAL) fl_sandbox_start(fl_sandbox_get(), L, NULL);
         /* require "femlod" and its helpers work in every command. */
         luaL_getsubtable(L, LUA_REGISTRYINDEX, LUA_PRELOAD_TABLE);
         lua_pushcfunction(L, luaopen_femlod);
@@ -862,8 +924,19 @@ static int pmain(lua_State *L) {
     return 1;
 }
 
+/* As lauxlib's: the message of an error outside any protected call. */
+static int panic(lua_State *L) {
+    const char *msg = lua_tostring(L, -1);
+    fprintf(stderr, PROGNAME ": unprotected error in call to Lua API (%s)\n",
+            msg ? msg : "error object is not a string");
+    return 0;
+}
+
 int main(int argc, char **argv) {
-    lua_State *L = luaL_newstate();
+    /* luaL_newstate with the sandbox's counting allocator (no cap unless
+     * --max-memory sets one). */
+    lua_State *L = lua_newstate(fl_sandbox_alloc, fl_sandbox_get());
+    if (L) lua_atpanic(L, panic);
     if (L == NULL) {
         fputs(PROGNAME ": cannot create the Lua state: not enough memory\n", stderr);
         return EXIT_ERROR;
@@ -873,6 +946,7 @@ int main(int argc, char **argv) {
     lua_pushlightuserdata(L, argv);
     int status = lua_pcall(L, 2, 1, 0);
     int result = status == LUA_OK ? (int)lua_tointeger(L, -1) : report(L);
+    fl_sandbox_stop(fl_sandbox_get(), L, NULL);
     lua_close(L);
     /* A full disk or closed pipe on stdout is a failure too. */
     if (fflush(stdout) != 0 || ferror(stdout)) {

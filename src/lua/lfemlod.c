@@ -24,8 +24,16 @@ int fl_lua_raise(lua_State *L, const femlod_error *err) {
         lua_pushfstring(L, "femlod: %s error", femlod_status_name(err->status));
     else
         lua_pushstring(L, err->message);
-    lua_concat(L, 2);
-    if (err->status == FEMLOD_ELIMIT) {
+    /* Under a memory cap, RLIMIT_AS is what made the core's malloc fail. */
+    fl_lua_guard *g = err->status == FEMLOD_ENOMEM ? fl_lua_guard_get(L) : NULL;
+    if (g && g->memory_capped) {
+        lua_pushliteral(L, "; ");
+        lua_pushstring(L, g->memory_message);
+        lua_concat(L, 4);
+    } else {
+        lua_concat(L, 2);
+    }
+    if (err->status == FEMLOD_ELIMIT || (g && g->memory_capped)) {
         lua_pushvalue(L, -1);
         lua_setfield(L, LUA_REGISTRYINDEX, LIMIT_KEY);
     }
@@ -37,12 +45,76 @@ int fl_lua_is_limit_error(lua_State *L, const char *msg) {
     if (msg && lua_getfield(L, LUA_REGISTRYINDEX, LIMIT_KEY) == LUA_TSTRING) {
         size_t n;
         const char *limit = lua_tolstring(L, -1, &n);
-        /* The message may have grown a traceback, never a new beginning. */
-        hit = strncmp(msg, limit, n) == 0 && (msg[n] == '\0' || msg[n] == '\n');
+        /* The message may have grown a traceback, and a position in front
+         * (coroutine.wrap adds one when the error leaves the coroutine). */
+        for (const char *p = strstr(msg, limit); p && !hit; p = strstr(p + 1, limit))
+            hit = p[n] == '\0' || p[n] == '\n';
     }
     lua_pop(L, 1);
     return hit;
 }
+
+int fl_lua_raise_limit(lua_State *L, int level, const char *msg) {
+    luaL_where(L, level);
+    lua_pushstring(L, msg);
+    lua_concat(L, 2);
+    lua_pushvalue(L, -1);
+    lua_setfield(L, LUA_REGISTRYINDEX, LIMIT_KEY);
+    return lua_error(L);
+}
+
+/* {====================================================================
+ * The guard
+ * ===================================================================== */
+
+fl_lua_guard *fl_lua_guard_get(lua_State *L) {
+    lua_getfield(L, LUA_REGISTRYINDEX, FL_GUARD_KEY);
+    fl_lua_guard *g = (fl_lua_guard *)lua_touserdata(L, -1);
+    lua_pop(L, 1);
+    return g;
+}
+
+const char *fl_lua_check_path(lua_State *L, int arg, int write) {
+    size_t len;
+    const char *path = luaL_checklstring(L, arg, &len);
+    /* A zero byte would silently cut the path short in the C library. */
+    luaL_argcheck(L, strlen(path) == len, arg, "path contains a zero byte");
+    fl_lua_guard *g = fl_lua_guard_get(L);
+    const char *why = g ? g->check_path(g, path, write) : NULL;
+    if (why) luaL_error(L, "%s", why);
+    return path;
+}
+
+/* Over the cap, a full collection first: the meshes of unreachable boxes
+ * are still charged, and the collector does not know their size. */
+static int over_cap(lua_State *L, fl_lua_guard *g) {
+    if (!g->charge(g, 0)) return 0;
+    lua_gc(L, LUA_GCCOLLECT);
+    return g->charge(g, 0);
+}
+
+void fl_lua_charge(lua_State *L, double bytes) {
+    fl_lua_guard *g = fl_lua_guard_get(L);
+    if (!g) return;
+    int over = g->charge(g, bytes);
+    if (bytes <= 0) return;
+    if (over && over_cap(L, g)) fl_lua_raise_limit(L, 1, g->memory_message);
+    /* Pace the collector as if the bytes were Lua's: otherwise it sees a
+     * few bytes of box per mesh, and dropped meshes pile up until the
+     * allocator refuses (its emergency collection runs no finalizer). */
+    if (g->memory_capped) lua_gc(L, LUA_GCSTEP, bytes > 1e9 ? 1000000 : (int)(bytes / 1024));
+}
+
+void fl_lua_reserve(lua_State *L, double bytes) {
+    fl_lua_guard *g = fl_lua_guard_get(L);
+    if (!g) return;
+    int over = g->charge(g, bytes);
+    if (over) over = over_cap(L, g);
+    g->charge(g, -bytes);
+    if (over) fl_lua_raise_limit(L, 1, g->memory_message);
+}
+
+/* }==================================================================== */
 
 /* {====================================================================
  * Embedded helpers

@@ -48,9 +48,57 @@ FL_LUA_INTERNAL void fl_lua_preload_helpers(lua_State *L);
  * FEMLOD_ELIMIT failure is also recorded, so that the program can tell when
  * a recipe died of it (fl_lua_is_limit_error) and exit with code 3. */
 FL_LUA_INTERNAL int fl_lua_raise(lua_State *L, const femlod_error *err);
-/* True when msg is the last recorded limit failure (a traceback may follow).
+/* True when msg is the last recorded limit failure (a position may come
+ * before it, a traceback after it).
  * A recipe that caught that failure and died of another error gets false. */
 FL_LUA_INTERNAL int fl_lua_is_limit_error(lua_State *L, const char *msg);
+
+/* {====== The guard: a host's policy (the femlod program's --sandbox and
+ * caps, src/cli/sandbox.c). A host stores a pointer to one in the registry
+ * under FL_GUARD_KEY; without one (the module in a stock lua5.4) every path
+ * is allowed and nothing is charged. The core knows nothing of it: the
+ * binding asks before it calls the core. */
+
+#define FL_GUARD_KEY "femlod.guard"
+
+typedef struct fl_lua_guard fl_lua_guard;
+struct fl_lua_guard {
+    /* NULL when path may be read (write == 0) or created or replaced
+     * (write == 1); otherwise the reason, a message naming the path (valid
+     * until the next call). Must not raise. */
+    const char *(*check_path)(fl_lua_guard *g, const char *path, int write);
+    /* Adds bytes (a refund when negative) to the memory charged against
+     * the cap; returns nonzero when the total now passes it. Must not raise. */
+    int (*charge)(fl_lua_guard *g, double bytes);
+    /* Nonzero once the time cap has passed; polled by long C calls through
+     * their progress callbacks, with the thread that called them, on which
+     * it then arms the hook that stops every later instruction (so that the
+     * stop cannot be caught). Must not raise or allocate. */
+    int (*expired)(fl_lua_guard *g, lua_State *L);
+    /* The message of each cap ("time limit of 2 s exceeded (--max-time)"). */
+    const char *time_message, *memory_message;
+    /* Nonzero when a memory cap is in force: the core's FEMLOD_ENOMEM then
+     * counts as the cap (setrlimit made the allocation fail). */
+    int memory_capped;
+};
+
+/* The installed guard, or NULL. */
+FL_LUA_INTERNAL fl_lua_guard *fl_lua_guard_get(lua_State *L);
+/* The path at argument arg, for reading or writing: raises on a non-string,
+ * a zero byte or a path the guard refuses. */
+FL_LUA_INTERNAL const char *fl_lua_check_path(lua_State *L, int arg, int write);
+/* Charges bytes of core memory held by a Lua object (a refund when
+ * negative); a charge that passes the cap raises the memory limit error.
+ * The charge stays made either way, so the object's release refunds it. */
+FL_LUA_INTERNAL void fl_lua_charge(lua_State *L, double bytes);
+/* Raises the memory limit error when charging bytes more would pass the
+ * cap; charges nothing (for a result about to be made). */
+FL_LUA_INTERNAL void fl_lua_reserve(lua_State *L, double bytes);
+/* Raises msg as a limit failure (exit status 3 from the program), with the
+ * position of the function at stack level `level` in front. */
+FL_LUA_INTERNAL int fl_lua_raise_limit(lua_State *L, int level, const char *msg);
+
+/* }====== */
 
 /* {====== femlod.Mesh (lmesh.c) */
 
@@ -63,6 +111,13 @@ FL_LUA_INTERNAL femlod_mesh *fl_lmesh_check(lua_State *L, int arg);
  * slot afterwards (the core writes *out only on success): if that fails or
  * raises, the box is already owned by Lua and its __gc frees nothing. */
 FL_LUA_INTERNAL femlod_mesh **fl_lmesh_box(lua_State *L);
+/* The core memory of a mesh as the guard charges it: 24 bytes a vertex, 12
+ * a triangle. */
+FL_LUA_INTERNAL double fl_lmesh_bytes(double vertices, double triangles);
+/* Charges the mesh in a filled box (see fl_lua_charge). */
+FL_LUA_INTERNAL void fl_lmesh_charge(lua_State *L, femlod_mesh *const *slot);
+/* Frees the mesh in a box now, refunds its charge and leaves the box closed. */
+FL_LUA_INTERNAL void fl_lmesh_release(lua_State *L, femlod_mesh **slot);
 
 /* }====== */
 

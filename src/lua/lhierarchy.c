@@ -249,11 +249,12 @@ static void read_lock(lua_State *L, const fl_opts *o, femlod_simplify_options *s
  * femlod.simplify
  * ===================================================================== */
 
-enum { PROGRESS_OK, PROGRESS_ERROR, PROGRESS_BAD_RESULT };
+enum { PROGRESS_OK, PROGRESS_ERROR, PROGRESS_BAD_RESULT, PROGRESS_LIMIT };
 
 typedef struct progress_call {
     lua_State *L;
-    int fn;              /* stack index of the function */
+    int fn;              /* stack index of the function; 0 for none */
+    fl_lua_guard *guard; /* polled for the time cap when not NULL */
     int failed;          /* PROGRESS_*; on PROGRESS_ERROR the error value is on the top */
     const char *got;     /* PROGRESS_BAD_RESULT: type name of the result (static) */
 } progress_call;
@@ -265,6 +266,11 @@ static int call_progress(void *payload, double done) {
     progress_call *pc = (progress_call *)payload;
     lua_State *L = pc->L;
     if (pc->failed != PROGRESS_OK) return 1;
+    if (pc->guard && pc->guard->expired(pc->guard, L)) {
+        pc->failed = PROGRESS_LIMIT;
+        return 1;
+    }
+    if (!pc->fn) return 0;
     lua_pushvalue(L, pc->fn);
     lua_pushnumber(L, done);
     if (lua_pcall(L, 1, 1, 0) != LUA_OK) {
@@ -308,7 +314,14 @@ static int lib_simplify(lua_State *L) {
             luaL_argerror(L, o.arg, msg);
         }
     }
-    progress_call pc = {L, 0, PROGRESS_OK, NULL};
+    progress_call pc = {L, 0, fl_lua_guard_get(L), PROGRESS_OK, NULL};
+    /* Under a time cap the core polls it through the progress callback. */
+    if (pc.guard && pc.guard->time_message) {
+        so.progress = call_progress;
+        so.progress_payload = &pc;
+    } else {
+        pc.guard = NULL;
+    }
     int t = fl_opts_push(&o, "progress");
     if (t != LUA_TNIL) {
         if (t != LUA_TFUNCTION)
@@ -344,6 +357,7 @@ static int lib_simplify(lua_State *L) {
     if (pc.failed != PROGRESS_OK) {
         hierarchy_release(h);
         if (pc.failed == PROGRESS_ERROR) return lua_error(L);
+        if (pc.failed == PROGRESS_LIMIT) return fl_lua_raise_limit(L, 1, pc.guard->time_message);
         return fl_opts_error(&o, "progress",
                              lua_pushfstring(L, "function returned %s (boolean or nil expected)",
                                              pc.got));
@@ -354,14 +368,6 @@ static int lib_simplify(lua_State *L) {
     }
     lua_settop(L, hidx);
     return 1;
-}
-
-/* A path for the C library: a zero byte would silently cut it short. */
-static const char *check_path(lua_State *L, int arg) {
-    size_t len;
-    const char *path = luaL_checklstring(L, arg, &len);
-    luaL_argcheck(L, strlen(path) == len, arg, "path contains a zero byte");
-    return path;
 }
 
 /* Refuses extra arguments: a recipe's options table there would be ignored. */
@@ -378,7 +384,7 @@ static int result_is_none(const femlod_simplify_result *r) {
 
 /* femlod.load_hierarchy(path): a Hierarchy from a .flh file, with its front. */
 static int lib_load_hierarchy(lua_State *L) {
-    const char *path = check_path(L, 1);
+    const char *path = fl_lua_check_path(L, 1, 0);
     no_more_arguments(L, 2);
     fl_hierarchy *h = hierarchy_box(L);
     femlod_error err;
@@ -454,8 +460,14 @@ static void push_node(lua_State *L, const femlod_node_info *n, int with_position
  * malloc'd node ids, which the caller frees before anything raises. */
 static femlod_mesh *push_front_mesh(lua_State *L, fl_hierarchy *h, uint32_t **ids) {
     femlod_mesh **slot = fl_lmesh_box(L);
+    fl_lua_guard *g = fl_lua_guard_get(L);
     femlod_error err;
     if (femlod_hierarchy_extract(h->hier, slot, ids, &err) != FEMLOD_OK) fl_lua_raise(L, &err);
+    /* Charged, and refunded by its release; over the cap it raises unless
+     * the caller holds ids (it frees them, then releases the mesh). */
+    if (g && g->charge(g, fl_lmesh_bytes((double)femlod_mesh_vertex_count(*slot),
+                                         (double)femlod_mesh_triangle_count(*slot))) && !ids)
+        fl_lua_raise_limit(L, 1, g->memory_message);
     return *slot;
 }
 
@@ -486,8 +498,7 @@ static int hierarchy_front(lua_State *L) {
     }
     free(ids);
     femlod_mesh **slot = (femlod_mesh **)lua_touserdata(L, -1);
-    femlod_mesh_free(*slot); /* now, rather than at some later collection */
-    *slot = NULL;
+    fl_lmesh_release(L, slot); /* now, rather than at some later collection */
     lua_pop(L, 1);
     return 1;
 }
@@ -498,8 +509,7 @@ static size_t front_vertices(lua_State *L, fl_hierarchy *h) {
     femlod_mesh *m = push_front_mesh(L, h, NULL);
     size_t nv = femlod_mesh_vertex_count(m);
     femlod_mesh **slot = (femlod_mesh **)lua_touserdata(L, -1);
-    femlod_mesh_free(*slot);
-    *slot = NULL;
+    fl_lmesh_release(L, slot);
     lua_pop(L, 1);
     return nv;
 }
@@ -1106,7 +1116,7 @@ static int hierarchy_validate(lua_State *L) {
 
 static int hierarchy_save(lua_State *L) {
     fl_hierarchy *h = fl_lhierarchy_check(L, 1);
-    const char *path = check_path(L, 2);
+    const char *path = fl_lua_check_path(L, 2, 1);
     no_more_arguments(L, 3);
     femlod_error err;
     if (femlod_hierarchy_save(h->hier, path, h->has_result ? &h->result : NULL, &err) != FEMLOD_OK)

@@ -29,6 +29,25 @@ femlod_mesh **fl_lmesh_box(lua_State *L) {
     return p;
 }
 
+double fl_lmesh_bytes(double vertices, double triangles) {
+    return 24.0 * vertices + 12.0 * triangles;
+}
+
+void fl_lmesh_charge(lua_State *L, femlod_mesh *const *slot) {
+    fl_lua_charge(L, fl_lmesh_bytes((double)femlod_mesh_vertex_count(*slot),
+                                    (double)femlod_mesh_triangle_count(*slot)));
+}
+
+void fl_lmesh_release(lua_State *L, femlod_mesh **slot) {
+    if (!*slot) return;
+    double bytes = fl_lmesh_bytes((double)femlod_mesh_vertex_count(*slot),
+                                  (double)femlod_mesh_triangle_count(*slot));
+    femlod_mesh_free(*slot); /* first: the look-up below may raise (memory) */
+    *slot = NULL;
+    fl_lua_guard *g = fl_lua_guard_get(L);
+    if (g) g->charge(g, -bytes);
+}
+
 femlod_mesh *fl_lmesh_check(lua_State *L, int arg) {
     femlod_mesh **p = (femlod_mesh **)luaL_checkudata(L, arg, FL_MESH_MT);
     if (!*p) luaL_error(L, "attempt to use a closed femlod.Mesh");
@@ -46,25 +65,18 @@ static femlod_format check_format(lua_State *L, int arg) {
     return i < 0 ? FEMLOD_FORMAT_AUTO : femlod_format_from_name(format_names[i]);
 }
 
-/* A path for the C library: a zero byte would silently cut it short. */
-static const char *check_path(lua_State *L, int arg) {
-    size_t len;
-    const char *path = luaL_checklstring(L, arg, &len);
-    luaL_argcheck(L, strlen(path) == len, arg, "path contains a zero byte");
-    return path;
-}
-
 /* {====================================================================
  * Module functions: the constructors
  * ===================================================================== */
 
 static int lib_load(lua_State *L) {
-    const char *path = check_path(L, 1);
+    const char *path = fl_lua_check_path(L, 1, 0);
     femlod_read_options opts = FEMLOD_READ_OPTIONS_INIT;
     opts.format = check_format(L, 2);
     femlod_mesh **slot = fl_lmesh_box(L);
     femlod_error err;
     if (femlod_mesh_read(slot, path, &opts, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    fl_lmesh_charge(L, slot);
     return 1;
 }
 
@@ -188,6 +200,7 @@ static int lib_mesh(lua_State *L) {
     femlod_mesh **slot = fl_lmesh_box(L);
     femlod_error err;
     if (femlod_mesh_create(slot, pos, nv, tri, nt, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    fl_lmesh_charge(L, slot);
     return 1;
 }
 
@@ -400,7 +413,7 @@ static femlod_index_set *read_sets(lua_State *L, const fl_opts *o, const char *k
 
 static int mesh_save(lua_State *L) {
     const femlod_mesh *m = fl_lmesh_check(L, 1);
-    const char *path = check_path(L, 2);
+    const char *path = fl_lua_check_path(L, 2, 1);
     femlod_write_options opts = FEMLOD_WRITE_OPTIONS_INIT;
     fl_opts o;
     fl_opts_open(&o, L, 3, save_keys);
@@ -533,10 +546,16 @@ static int mesh_subdivide(lua_State *L) {
     lua_Integer levels = luaL_optinteger(L, 2, 1);
     luaL_argcheck(L, levels >= 0 && levels <= MAX_LEVELS, 2,
                   "levels out of range (0.." MAX_LEVELS_TEXT ")");
+    /* Under a memory cap, refuse before allocating: the result has at
+     * least 4^levels times the triangles and all the vertices. */
+    fl_lua_reserve(L, fl_lmesh_bytes((double)femlod_mesh_vertex_count(m),
+                                     (double)femlod_mesh_triangle_count(m) *
+                                         ldexp(1.0, 2 * (int)levels)));
     femlod_mesh **slot = fl_lmesh_box(L);
     femlod_error err;
     if (femlod_mesh_subdivide(slot, m, (unsigned)levels, &err) != FEMLOD_OK)
         return fl_lua_raise(L, &err);
+    fl_lmesh_charge(L, slot);
     return 1;
 }
 
@@ -598,6 +617,7 @@ static int mesh_copy(lua_State *L) {
     femlod_mesh **slot = fl_lmesh_box(L);
     femlod_error err;
     if (femlod_mesh_copy(slot, m, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    fl_lmesh_charge(L, slot);
     return 1;
 }
 
@@ -688,9 +708,7 @@ static int mesh_curvature(lua_State *L) {
  * __close runs at scope exit even after an explicit close(), and __gc after
  * both. */
 static int mesh_gc(lua_State *L) {
-    femlod_mesh **p = (femlod_mesh **)luaL_checkudata(L, 1, FL_MESH_MT);
-    femlod_mesh_free(*p);
-    *p = NULL;
+    fl_lmesh_release(L, (femlod_mesh **)luaL_checkudata(L, 1, FL_MESH_MT));
     return 0;
 }
 

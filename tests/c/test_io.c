@@ -1128,11 +1128,11 @@ static void test_atomic_writes(void) {
     snprintf(p, sizeof p, "%s/no/such/dir/x.obj", scratch);
     CHECK(femlod_mesh_write(small, p, NULL, &err) == FEMLOD_EIO);
     CHECK_STR_HAS(err.message, "x.obj: cannot create temporary file: No such file or directory");
-    /* A target that is a folder: the rename fails, the temporary goes. */
+    /* A target that is a folder: refused before any temporary is made. */
     path_in(p, sizeof p, dir, "sub.obj");
     mkdir(p, 0755);
     CHECK(femlod_mesh_write(small, p, NULL, &err) == FEMLOD_EIO);
-    CHECK_STR_HAS(err.message, "sub.obj: cannot rename temporary file into place: Is a directory");
+    CHECK_STR_HAS(err.message, "sub.obj: cannot write: Is a directory");
     CHECK(temp_files_in(dir) == 0);
     rmdir(p);
     /* Unknown extension, and the format option overriding it. */

@@ -223,4 +223,174 @@ do
 end
 -- }======
 
+-- {====== from a recipe file run by the program: the recipe's file:line,
+-- then the core's own file:line or byte, on stderr, with exit status 1
+local FEMLOD = P.femlod
+local function quote(s) return "'" .. tostring(s):gsub("'", "'\\''") .. "'" end
+local ERRF = path("stderr.txt")
+-- Runs `cd DIR && PREFIX femlod ARGS...`; returns exit code, stdout, stderr.
+local function spawn(dir, prefix, ...)
+  local parts = { "cd " .. quote(dir) .. " &&", prefix or "", quote(FEMLOD) }
+  for i = 1, select("#", ...) do parts[#parts + 1] = quote((select(i, ...))) end
+  local f = assert(io.popen(table.concat(parts, " ") .. " 2>" .. quote(ERRF) .. " </dev/null", "r"))
+  local out = f:read("a")
+  local _, how, code = f:close()
+  T.check(how == "exit", "femlod ended by a signal: " .. tostring(code))
+  return code, out, T.readfile(ERRF) or ""
+end
+if FEMLOD then
+  local dir = tmp .. "/positions"
+  os.execute("rm -rf " .. quote(dir) .. " && mkdir -p " .. quote(dir))
+  T.writefile(dir .. "/range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
+  T.writefile(dir .. "/bad.flh", "FLH")
+  T.writefile(dir .. "/trunc.stl", "solid x\n  facet normal 0 0 1\n")
+  T.writefile(dir .. "/nan.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+    .. "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 nan 0\n0 1 0\n3 0 1 2\n")
+  local cases = {
+    -- recipe line 3 calls the reader; the core names the file's line 4
+    { "femlod.load('range.obj')", "range.obj:4: face index 9 out of range (3 vertices)" },
+    { "femlod.load_hierarchy('bad.flh')", "bad.flh: byte 0: not a femlod hierarchy file" },
+    { "femlod.load('trunc.stl')", "trunc.stl:2: expected 'outer', found the end of the file" },
+    { "femlod.mesh { positions = { 0, 0, 0 }, triangles = { 1, 1, 2 } }",
+      "bad argument #1 to 'mesh' (triangles[3]: index 2 out of range (1..1))" },
+    { "femlod.load('range.obj', { format = 'off' })", nil },
+  }
+  for i, c in ipairs(cases) do
+    local name = string.format("pos%d.lua", i)
+    T.writefile(dir .. "/" .. name, "-- a recipe\nlocal femlod = require 'femlod'\nlocal m = " .. c[1] .. "\nprint(m)\n")
+    local code, out, err = spawn(dir, nil, "run", name)
+    T.eq(code, 1, name .. ": exit 1")
+    T.eq(out, "", name .. ": nothing printed")
+    if c[2] then
+      T.eq(err, "femlod: " .. name .. ":3: " .. c[2] .. "\n", name .. ": message")
+    else
+      T.check(err:find("^femlod: " .. name .. ":3: range%.obj:1: ") ~= nil, name .. ": recipe line, file line: " .. err)
+    end
+  end
+  -- Through a function: the line inside it that called femlod, and with
+  -- --traceback the calling lines too.
+  T.writefile(dir .. "/nested.lua", "local function load_it(p)\n  return femlod.load(p)\nend\n\nload_it('range.obj')\n")
+  local code, _, err = spawn(dir, nil, "--traceback", "run", "nested.lua")
+  T.eq(code, 1, "nested: exit 1")
+  T.eq(err:match("^[^\n]*"), "femlod: nested.lua:2: range.obj:4: face index 9 out of range (3 vertices)", "nested: first line")
+  T.check(err:find("\n\tnested%.lua:5: in main chunk\n") ~= nil, "nested: traceback names line 5: " .. err)
+end
+-- }======
+
+-- {====== nothing lost: every writer, from Lua and from the program, under
+-- every way a write fails; each gives one error naming the file, leaves the
+-- old file byte for byte, and leaves no temporary behind
+if FEMLOD then
+  local LOST = tmp .. "/lost"
+  os.execute("chmod -R u+w " .. quote(LOST) .. " 2>/dev/null; rm -rf " .. quote(LOST))
+  assert(os.execute("mkdir -p " .. quote(LOST)))
+  local mesh = P.shared .. "/spider_binary.stl" -- every output of it is over 2 KiB
+  -- A hierarchy for lod, made in a good folder.
+  local flh = LOST .. "/good.flh"
+  local code, _, err = spawn(LOST, nil, "simplify", mesh, LOST .. "/good.obj", "--ratio", "0.5", "--hierarchy", flh)
+  T.eq(code, 0, "the lod input: " .. err)
+
+  local WRITERS = { "obj", "stl", "stl_ascii", "off", "ply", "ply_ascii", "gltf", "glb", "flh" }
+  local EXT = { stl_ascii = "stl", ply_ascii = "ply" }
+  T.writefile(LOST .. "/writers.lua", [[
+local dir, mesh = params.dir, params.mesh
+local m = femlod.load(mesh)
+local h = m:simplify { ratio = 0.5 }
+local function save(fmt, p)
+  if fmt == "flh" then h:save(p) else m:save(p, { format = fmt }) end
+end
+for fmt in params.writers:gmatch("[%w_]+") do
+  local ok, msg = pcall(save, fmt, dir .. "/" .. fmt .. "." .. (params[fmt] or fmt))
+  print(fmt, ok, msg)
+end
+]])
+  -- The program's writers: name, arguments, the file whose error it reports.
+  local function cli_writes(dir)
+    return {
+      { "convert", { "convert", mesh, dir .. "/convert.obj" }, dir .. "/convert.obj" },
+      { "simplify", { "simplify", mesh, dir .. "/simplify.stl", "--ratio", "0.5" }, dir .. "/simplify.stl" },
+      { "simplify --hierarchy", { "simplify", mesh, dir .. "/simplify2.off", "--ratio", "0.5", "--hierarchy",
+        dir .. "/simplify2.flh" }, dir .. "/simplify2.flh" },
+      { "lod", { "lod", flh, dir .. "/lod.ply", "--size", "0" }, dir .. "/lod.ply" },
+    }
+  end
+  local function targets(dir)
+    local t = {}
+    for _, fmt in ipairs(WRITERS) do t[#t + 1] = dir .. "/" .. fmt .. "." .. (EXT[fmt] or fmt) end
+    for _, w in ipairs(cli_writes(dir)) do
+      t[#t + 1] = w[2][3]
+      if w[2][#w[2] - 1] == "--hierarchy" then t[#t + 1] = w[2][#w[2]] end
+    end
+    return t
+  end
+  local function listing(dir)
+    local f = io.popen("ls -A " .. quote(dir) .. " 2>/dev/null | LC_ALL=C sort")
+    local s = f:read("a")
+    f:close()
+    return s
+  end
+
+  -- Runs every writer into dir (made by setup, undone by teardown); each must
+  -- fail with "FILE: " .. expected, leave dir's listing and old files as
+  -- they were.
+  local function case(name, dir, expected, prefix, setup, teardown)
+    if setup ~= "missing" then os.execute("mkdir -p " .. quote(dir)) end
+    local old = {}
+    if setup ~= "missing" then
+      for _, t in ipairs(targets(dir)) do
+        if setup == "folders" then
+          os.execute("mkdir -p " .. quote(t))
+        else
+          old[t] = "old content of " .. t .. "\n"
+          T.writefile(t, old[t])
+        end
+      end
+    end
+    if type(setup) == "function" then setup(dir) end
+    local before = listing(dir)
+    local args = { "run", "writers.lua", "dir=" .. dir, "mesh=" .. mesh,
+      "writers=" .. table.concat(WRITERS, ","), "stl_ascii=stl", "ply_ascii=ply" }
+    local code, out, err = spawn(LOST, prefix, table.unpack(args))
+    T.eq(code, 0, name .. ": the writers recipe ran: " .. err)
+    local seen = 0
+    for fmt, ok, msg in out:gmatch("([%w_]+)\t(%a+)\t([^\n]*)\n") do
+      seen = seen + 1
+      local p = dir .. "/" .. fmt .. "." .. (EXT[fmt] or fmt)
+      T.eq(ok, "false", name .. ": " .. fmt .. " must fail")
+      T.eq(msg, "writers.lua:5: " .. p .. ": " .. expected, name .. ": " .. fmt .. " message")
+    end
+    T.eq(seen, #WRITERS, name .. ": every writer tried")
+    for _, w in ipairs(cli_writes(dir)) do
+      local c, o, e = spawn(LOST, prefix, table.unpack(w[2]))
+      T.eq(c, 1, name .. ": " .. w[1] .. " exit 1")
+      T.eq(o, "", name .. ": " .. w[1] .. " prints no report")
+      T.eq(e, "femlod: " .. w[3] .. ": " .. expected .. "\n", name .. ": " .. w[1] .. " message")
+    end
+    if teardown then teardown(dir) end
+    T.eq(listing(dir), before, name .. ": no file made or removed, no temporary left")
+    for t, content in pairs(old) do
+      T.eq(T.readfile(t), content, name .. ": " .. t .. " intact")
+    end
+  end
+
+  -- A full disk: the file size limit makes write() fail with EFBIG (SIGXFSZ
+  -- ignored), part-way through every output (dash counts 512-byte blocks).
+  case("disk full", LOST .. "/full", "cannot write: File too large", "trap '' XFSZ; ulimit -f 4;")
+  -- A folder the user cannot write: as root, without CAP_DAC_OVERRIDE.
+  local root = io.popen("id -u"):read("l") == "0"
+  case("read-only folder", LOST .. "/rodir", "cannot create temporary file: Permission denied",
+    root and "setpriv --bounding-set=-dac_override,-dac_read_search" or nil,
+    function(dir) os.execute("chmod 555 " .. quote(dir)) end,
+    function(dir) os.execute("chmod 755 " .. quote(dir)) end)
+  -- Existing read-only files: refused even as root, whose rename would work.
+  case("read-only files", LOST .. "/rofiles", "cannot write: file is read-only (mode 0444)", nil,
+    function(dir) os.execute("chmod 444 " .. quote(dir) .. "/*") end,
+    function(dir) os.execute("chmod 644 " .. quote(dir) .. "/*") end)
+  case("targets are folders", LOST .. "/folders", "cannot write: Is a directory", nil, "folders")
+  case("missing folder", LOST .. "/missing/sub", "cannot create temporary file: No such file or directory",
+    nil, "missing")
+  T.check(not T.exists(LOST .. "/missing/sub/."), "the missing folder was not made")
+end
+-- }======
+
 T.summary("test_errors")
