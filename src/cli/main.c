@@ -11,6 +11,7 @@
  * number printing are locale independent.
  */
 #include "lua/lfemlod.h"
+#include "sweep.h"
 
 #include <lualib.h>
 
@@ -25,7 +26,7 @@
 enum { EXIT_OK = 0, EXIT_ERROR = 1, EXIT_USAGE = 2, EXIT_LIMIT = 3 };
 
 typedef enum command {
-    CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY, CMD_LOD
+    CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY, CMD_LOD, CMD_SWEEP
 } command;
 
 /* What the command line asked for. Indices point into argv. */
@@ -34,6 +35,7 @@ typedef struct cli {
     char **argv;
     lua_Integer seed;
     int quiet, traceback;
+    const char *record; /* --record FILE, or NULL */
     command cmd;
     int script;     /* argv index that becomes arg[0] (lua.c's convention); 0 for -e */
     int operand;    /* first operand: recipe, code, mesh or input */
@@ -67,12 +69,22 @@ static void usage_text(FILE *f) {
           "                   result, refined where a vertex's e_size (mean edge\n"
           "                   length) exceeds T; 0 gives the input, inf the\n"
           "                   simplification result; also size=T\n"
+          "  sweep RECIPE.lua [name=value ...] --grid NAME=V1,V2,... [--grid ...]\n"
+          "                   run the recipe once per grid point (the last --grid\n"
+          "                   varies fastest), each in its own process; writes\n"
+          "                   DIR/points/NNN/, DIR/manifest.json, DIR/results.csv\n"
+          "                   --jobs N (default 2)  --out DIR (default sweep)\n"
+          "                   --emit-jobs (print one command per point instead)\n"
+          "                   --point N (run point N only)  --collect (write the\n"
+          "                   manifest from the points already run)\n"
           "  help             print this help\n"
           "\n"
           "Options:\n"
           "  --seed N         seed math.random with the integer N (default 0: runs repeat)\n"
           "  --quiet          print nothing but what the command is for\n"
           "  --traceback      add a Lua stack traceback to error messages\n"
+          "  --record FILE    run: also write FILE, a JSON record of the parameters,\n"
+          "                   the files read and written (SHA-256) and the meshes saved\n"
           "  -h, --help       print this help and exit\n"
           "  -v, --version    print the version and exit\n"
           "\n"
@@ -86,18 +98,33 @@ static void usage_text(FILE *f) {
 
 /* A usage error: one line naming the problem, one pointing at the help. */
 #if defined(__GNUC__)
+__attribute__((format(printf, 1, 0)))
+#endif
+static void usage_errorv(const char *fmt, va_list ap) {
+    fputs(PROGNAME ": ", stderr);
+    vfprintf(stderr, fmt, ap);
+    fputs("\nusage: " PROGNAME " [options] COMMAND [ARGS] [name=value ...]"
+          " (try '" PROGNAME " --help')\n",
+          stderr);
+    fflush(stderr);
+}
+
+#if defined(__GNUC__)
 __attribute__((format(printf, 1, 2)))
 #endif
 static int usage_error(const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
-    fputs(PROGNAME ": ", stderr);
-    vfprintf(stderr, fmt, ap);
+    usage_errorv(fmt, ap);
     va_end(ap);
-    fputs("\nusage: " PROGNAME " [options] COMMAND [ARGS] [name=value ...]"
-          " (try '" PROGNAME " --help')\n",
-          stderr);
-    fflush(stderr);
+    return EXIT_USAGE;
+}
+
+int fl_cli_usage_error(const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    usage_errorv(fmt, ap);
+    va_end(ap);
     return EXIT_USAGE;
 }
 
@@ -149,6 +176,14 @@ static int parse_args(lua_State *L, cli *c) {
             c->quiet = 1;
         } else if (strcmp(a, "--traceback") == 0) {
             c->traceback = 1;
+        } else if (strcmp(a, "--record") == 0 || strncmp(a, "--record=", 9) == 0) {
+            if (a[8] == '=') {
+                c->record = a + 9;
+            } else {
+                if (i + 1 >= c->argc) return usage_error("%s needs a value", a);
+                c->record = c->argv[++i];
+            }
+            if (!*c->record) return usage_error("--record: file name expected, got ''");
         } else if (strcmp(a, "--seed") == 0) {
             if (i + 1 >= c->argc) return usage_error("%s needs a value", a);
             int st = parse_seed(L, c, c->argv[++i]);
@@ -179,6 +214,8 @@ static int parse_args(lua_State *L, cli *c) {
     } else if (strcmp(w, "lod") == 0) {
         c->cmd = CMD_LOD;
         need = 2;
+    } else if (strcmp(w, "sweep") == 0) {
+        c->cmd = CMD_SWEEP;
     } else if (strcmp(w, "help") == 0) {
         usage_text(stdout);
         return EXIT_OK;
@@ -194,11 +231,13 @@ static int parse_args(lua_State *L, cli *c) {
         static const char *const what[] = {"", "a recipe", "a line of Lua", "a mesh file",
                                            "an input and an output file",
                                            "an input and an output file",
-                                           "a hierarchy file and an output file"};
+                                           "a hierarchy file and an output file",
+                                           "a recipe"};
         return usage_error("missing %s", what[c->cmd]);
     }
     c->pairs = c->operand + (need ? need : 1);
     c->script = c->cmd == CMD_RUN ? c->operand : 0;
+    if (c->record && c->cmd != CMD_RUN) return usage_error("--record goes with run only");
     return -1;
 }
 
@@ -284,6 +323,12 @@ static void set_arg_table(lua_State *L, const cli *c) {
     lua_setglobal(L, "arg");
 }
 
+/* --record: the record starts before the chunk runs (argument: the recipe's path). */
+static int record_start(lua_State *L) {
+    fl_record_start(L, lua_tostring(L, 1));
+    return 0;
+}
+
 /* Runs a recipe or a line of code with params and arg set, the module in
  * the global `femlod`, and math.random seeded. */
 static int cmd_lua(lua_State *L, const cli *c) {
@@ -308,13 +353,24 @@ static int cmd_lua(lua_State *L, const cli *c) {
         /* Text only: bytecode can crash the interpreter (manual, load). */
         status = luaL_loadfilex(L, strcmp(src, "-") == 0 ? NULL : src, "t");
     }
-    if (status != LUA_OK) return report(L);
+    if (status == LUA_OK && c->record) {
+        lua_pushcfunction(L, record_start);
+        lua_pushstring(L, strcmp(src, "-") == 0 ? NULL : src);
+        status = docall(L, 1, c->traceback);
+    }
+    if (status != LUA_OK) {
+        if (c->record) fl_record_write(L, c->record, lua_tostring(L, -1));
+        return report(L);
+    }
     /* The pairs are also the chunk's varargs, as script arguments are in lua.c. */
     int n = c->argc - c->pairs;
     luaL_checkstack(L, n + 3, "too many parameters"); /* a C function gets only LUA_MINSTACK */
     for (int i = c->pairs; i < c->argc; i++) lua_pushstring(L, c->argv[i]);
-    if (docall(L, n, c->traceback) != LUA_OK) return report(L);
-    return EXIT_OK;
+    status = docall(L, n, c->traceback);
+    /* The record is written either way: a failed point's reads are worth keeping. */
+    int rec = c->record ? fl_record_write(L, c->record, status == LUA_OK ? NULL : lua_tostring(L, -1)) : 0;
+    if (status != LUA_OK) return report(L);
+    return rec ? EXIT_ERROR : EXIT_OK;
 }
 
 /* }==================================================================== */
@@ -852,6 +908,11 @@ static int pmain(lua_State *L) {
         case CMD_CONVERT: st = cmd_convert(L, &c); break;
         case CMD_SIMPLIFY: st = cmd_simplify(L, &c); break;
         case CMD_LOD: st = cmd_lod(L, &c); break;
+        case CMD_SWEEP: {
+            fl_sweep_cli sc = {c.argc, c.argv, c.operand, c.seed, c.quiet, c.traceback};
+            st = fl_sweep_main(L, &sc);
+            break;
+        }
         case CMD_NONE: st = EXIT_USAGE; break;
         }
     }

@@ -44,6 +44,19 @@ int fl_lua_is_limit_error(lua_State *L, const char *msg) {
     return hit;
 }
 
+void fl_lua_io_hook(lua_State *L, const char *kind, int path, int object) {
+    path = lua_absindex(L, path);
+    object = lua_absindex(L, object);
+    if (lua_getfield(L, LUA_REGISTRYINDEX, FL_IO_HOOK) != LUA_TFUNCTION) {
+        lua_pop(L, 1);
+        return;
+    }
+    lua_pushstring(L, kind);
+    lua_pushvalue(L, path);
+    lua_pushvalue(L, object);
+    lua_call(L, 3, 0);
+}
+
 /* {====================================================================
  * Embedded helpers
  * ===================================================================== */
@@ -98,6 +111,10 @@ static int open_helper(lua_State *L, const char *module) {
 FL_LUA_EXPORT int luaopen_femlod_report(lua_State *L);
 int luaopen_femlod_report(lua_State *L) {
     return open_helper(L, "femlod.report");
+}
+FL_LUA_EXPORT int luaopen_femlod_sweep(lua_State *L);
+int luaopen_femlod_sweep(lua_State *L) {
+    return open_helper(L, "femlod.sweep");
 }
 
 /* }==================================================================== */

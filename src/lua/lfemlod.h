@@ -52,6 +52,15 @@ FL_LUA_INTERNAL int fl_lua_raise(lua_State *L, const femlod_error *err);
  * A recipe that caught that failure and died of another error gets false. */
 FL_LUA_INTERNAL int fl_lua_is_limit_error(lua_State *L, const char *msg);
 
+/* The file log of `femlod run --record` (femlod.sweep): when the registry
+ * holds a function under FL_IO_HOOK, the functions that read or write files
+ * (femlod.load, m:save, femlod.load_hierarchy, h:save) call it after each
+ * success as hook(kind, path, object), kind "read" or "write", the path as
+ * given and the object read or saved. Leaves the stack as it found it; an
+ * error in the hook propagates. Without a hook it costs one table lookup. */
+#define FL_IO_HOOK "femlod.io_hook"
+FL_LUA_INTERNAL void fl_lua_io_hook(lua_State *L, const char *kind, int path, int object);
+
 /* {====== femlod.Mesh (lmesh.c) */
 
 /* Creates the metatable and adds the module functions load and mesh to the

@@ -65,6 +65,7 @@ static int lib_load(lua_State *L) {
     femlod_mesh **slot = fl_lmesh_box(L);
     femlod_error err;
     if (femlod_mesh_read(slot, path, &opts, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    fl_lua_io_hook(L, "read", 1, -1);
     return 1;
 }
 
@@ -295,6 +296,7 @@ static int mesh_save(lua_State *L) {
     if (fl_opts_push(&o, "extras") != LUA_TNIL) opts.extras = extras_json(L, &o);
     femlod_error err;
     if (femlod_mesh_write(m, path, &opts, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    fl_lua_io_hook(L, "write", 2, 1);
     return 0;
 }
 
