@@ -17,7 +17,7 @@
 -- Plain Lua: without the program, start() and result() still work.
 
 local type, error, pairs, ipairs, tostring, getmetatable = type, error, pairs, ipairs, tostring, getmetatable
-local format, sort = string.format, table.sort
+local format, sort, table_remove = string.format, table.sort, table.remove
 
 local _ENV = nil -- no global access after this point
 
@@ -115,6 +115,34 @@ local function hook(kind, path, object)
       state.meshes[#state.meshes + 1] = e
       state.mesh_at[path] = #state.meshes
     end
+  end
+end
+
+-- Logs a file read or written by a helper that does not go through the
+-- binding (femlod.report's HTML pages); nothing when not recording.
+function M.log(kind, path)
+  if state.active and (kind == "read" or kind == "write") and type(path) == "string" then
+    hook(kind, path)
+  end
+end
+
+-- Drops a path from the log (a helper's temporary file, removed again).
+function M.forget(path)
+  for _, kind in ipairs { "read", "write" } do
+    local key = kind .. "\0" .. path
+    if state.seen[key] then
+      state.seen[key] = nil
+      local list = kind == "read" and state.reads or state.writes
+      for i = #list, 1, -1 do
+        if list[i] == path then table_remove(list, i) end
+      end
+    end
+  end
+  local at = state.mesh_at[path]
+  if at then
+    table_remove(state.meshes, at)
+    state.mesh_at = {}
+    for i, e in ipairs(state.meshes) do state.mesh_at[e.path] = i end
   end
 end
 

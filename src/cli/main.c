@@ -26,7 +26,7 @@
 enum { EXIT_OK = 0, EXIT_ERROR = 1, EXIT_USAGE = 2, EXIT_LIMIT = 3 };
 
 typedef enum command {
-    CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY, CMD_LOD, CMD_SWEEP
+    CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY, CMD_LOD, CMD_SWEEP, CMD_REPORT
 } command;
 
 /* What the command line asked for. Indices point into argv. */
@@ -77,6 +77,10 @@ static void usage_text(FILE *f) {
           "                   --emit-jobs (print one command per point instead)\n"
           "                   --point N (run point N only)  --collect (write the\n"
           "                   manifest from the points already run)\n"
+          "  report MESH [--reference ORIGINAL] [--html OUT.html] [--no-viewer]\n"
+          "                   print the quality report and Table 1 rows (and the\n"
+          "                   deviation from ORIGINAL); write an HTML page with\n"
+          "                   histograms and the mesh in a 3D viewer\n"
           "  help             print this help\n"
           "\n"
           "Options:\n"
@@ -216,6 +220,8 @@ static int parse_args(lua_State *L, cli *c) {
         need = 2;
     } else if (strcmp(w, "sweep") == 0) {
         c->cmd = CMD_SWEEP;
+    } else if (strcmp(w, "report") == 0) {
+        c->cmd = CMD_REPORT;
     } else if (strcmp(w, "help") == 0) {
         usage_text(stdout);
         return EXIT_OK;
@@ -232,7 +238,7 @@ static int parse_args(lua_State *L, cli *c) {
                                            "an input and an output file",
                                            "an input and an output file",
                                            "a hierarchy file and an output file",
-                                           "a recipe"};
+                                           "a recipe", "a mesh file"};
         return usage_error("missing %s", what[c->cmd]);
     }
     c->pairs = c->operand + (need ? need : 1);
@@ -908,9 +914,10 @@ static int pmain(lua_State *L) {
         case CMD_CONVERT: st = cmd_convert(L, &c); break;
         case CMD_SIMPLIFY: st = cmd_simplify(L, &c); break;
         case CMD_LOD: st = cmd_lod(L, &c); break;
-        case CMD_SWEEP: {
+        case CMD_SWEEP:
+        case CMD_REPORT: {
             fl_sweep_cli sc = {c.argc, c.argv, c.operand, c.seed, c.quiet, c.traceback};
-            st = fl_sweep_main(L, &sc);
+            st = c.cmd == CMD_SWEEP ? fl_sweep_main(L, &sc) : fl_report_main(L, &sc);
             break;
         }
         case CMD_NONE: st = EXIT_USAGE; break;

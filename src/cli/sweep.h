@@ -1,5 +1,6 @@
 /*
- * sweep.h - `femlod sweep` and `femlod run --record` (sweep.c), called by main.c.
+ * sweep.h - `femlod sweep`, `femlod run --record` (sweep.c) and `femlod report`
+ * (report.c), called by main.c.
  */
 #ifndef FEMLOD_CLI_SWEEP_H
 #define FEMLOD_CLI_SWEEP_H
@@ -25,6 +26,10 @@ int fl_cli_usage_error(const char *fmt, ...);
  * and succeeded, 1 some point failed or crashed, 2 usage error). Runs in the
  * program's Lua state (for the number syntax and the report page). */
 int fl_sweep_main(lua_State *L, const fl_sweep_cli *c);
+
+/* `femlod report MESH [--reference ORIGINAL] [--html OUT.html] [--no-viewer]`
+ * (report.c): prints the summary of femlod.report; returns the exit status. */
+int fl_report_main(lua_State *L, const fl_sweep_cli *c);
 
 /* --record FILE, before a recipe runs: starts femlod.sweep's record with the
  * global params and the recipe as the first file read, and installs its hook

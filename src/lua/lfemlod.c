@@ -127,5 +127,34 @@ int luaopen_femlod(lua_State *L) {
     fl_lhierarchy_open(L);
     lua_pushliteral(L, "femlod " FEMLOD_VERSION_STRING);
     lua_setfield(L, -2, "_VERSION");
+    /* Where femlod.report looks for the 3D viewer of its HTML pages. */
+    static const char *const viewer_paths[] = {
+#ifdef FEMLOD_VIEWER_BUILD
+        FEMLOD_VIEWER_BUILD,
+#endif
+#ifdef FEMLOD_VIEWER_INSTALL
+        FEMLOD_VIEWER_INSTALL,
+#endif
+        NULL};
+    lua_newtable(L);
+    for (int i = 0; viewer_paths[i]; i++) {
+        lua_pushstring(L, viewer_paths[i]);
+        lua_rawseti(L, -2, i + 1);
+    }
+    lua_setfield(L, -2, "_VIEWER_PATHS");
+    /* femlod.report(mesh, opts): the helper's report function. */
+    const fl_lua_chunk *c = find_chunk("femlod.report");
+    if (c) {
+        luaL_getsubtable(L, LUA_REGISTRYINDEX, LUA_LOADED_TABLE);
+        if (lua_getfield(L, -1, "femlod.report") != LUA_TTABLE) {
+            lua_pop(L, 1);
+            run_chunk(L, c);
+            lua_pushvalue(L, -1);
+            lua_setfield(L, -3, "femlod.report");
+        }
+        lua_getfield(L, -1, "report");
+        lua_setfield(L, -4, "report");
+        lua_pop(L, 2);
+    }
     return 1;
 }
