@@ -168,7 +168,7 @@ local m = femlod.load(params.mesh)
 if params.mode == "error" then error("point failed on purpose") end
 if params.mode == "crash" then
   local pid = io.open("/proc/self/stat"):read("n")
-  os.execute("kill -SEGV " .. pid)
+  os.execute("kill -KILL " .. pid)
 end
 if params.mode == "exit" then os.exit(0) end
 m:save(params.out_dir .. "/copy.off")
@@ -182,7 +182,7 @@ do
   T.eq(code, 1, "a point failed: exit 1")
   T.eq(err, "", "the sweep itself says nothing on stderr")
   T.check(out:find("point 001 mode=error: failed %(exit 1%)"), out)
-  T.check(out:find("point 002 mode=crash: crashed %(Segmentation fault%)"), out)
+  T.check(out:find("point 002 mode=crash: crashed %(Killed%)"), out)
   T.check(out:find("4 points: 1 ok, 3 failed"), out)
   local rows = read_csv(dir .. "/results.csv")
   T.eq(rows[1].status, "ok", "ok point")
@@ -192,13 +192,13 @@ do
   T.eq(rows[2].status, "failed", "error point")
   T.eq(rows[2].error, CRASH .. ":2: point failed on purpose", "the recipe's message")
   T.eq(rows[3].status, "crashed", "crashed point")
-  T.eq(rows[3].error, "killed by signal 11 (Segmentation fault)", "the signal")
+  T.eq(rows[3].error, "killed by signal 9 (Killed)", "the signal")
   T.eq(rows[4].status, "failed", "os.exit point")
   T.check(rows[4].error:find("no record"), rows[4].error)
   T.eq(T.readfile(dir .. "/points/001/stderr.txt"), "femlod: " .. CRASH .. ":2: point failed on purpose\n",
     "the failed point's stderr is kept")
   local m = T.readfile(dir .. "/manifest.json")
-  T.check(m:find('"status":%s*"crashed",%s*"exit":%s*null,%s*"signal":%s*11'), "crash in the manifest")
+  T.check(m:find('"status":%s*"crashed",%s*"exit":%s*null,%s*"signal":%s*9'), "crash in the manifest")
   T.check(m:find('"fixed":%s*{%s*"mesh":%s*"[^"]*fandisk.obj",%s*"scale":%s*2.5%s*}'), "fixed pairs")
   -- The failed point still recorded what it read before failing.
   local rec = T.readfile(dir .. "/points/001/record.json")
