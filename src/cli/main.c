@@ -734,8 +734,29 @@ static int cmd_simplify(lua_State *L, const cli *c) {
     }
     lua_pop(L, 1);
 
+    /* A progress bar on stderr when it is a terminal (femlod.progress). */
+    int bar = 0;
+    if (!c->quiet) {
+        lua_getglobal(L, "require");
+        lua_pushliteral(L, "femlod.progress");
+        lua_call(L, 1, 1);
+        lua_getfield(L, -1, "bar");
+        lua_createtable(L, 0, 1);
+        lua_pushliteral(L, "simplify");
+        lua_setfield(L, -2, "label");
+        lua_call(L, 1, 1);
+        lua_remove(L, -2);
+        bar = lua_gettop(L);
+        lua_getfield(L, bar, "update");
+        lua_setfield(L, opts, "progress");
+    }
     lua_pushvalue(L, opts);
     call_method(L, mesh, "simplify", 1, 1);
+    if (bar) {
+        lua_pushvalue(L, bar);
+        call_method(L, lua_gettop(L), "close", 0, 0);
+        lua_pop(L, 1);
+    }
     int h = lua_gettop(L);
     call_method(L, h, "mesh", 0, 1);
     int result = lua_gettop(L);

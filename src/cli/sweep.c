@@ -697,6 +697,36 @@ static int write_run(const sweep *s, size_t p, int status, const struct rusage *
     return st;
 }
 
+/* {=== the progress bar: on stderr when it is a terminal (and not --quiet),
+ * one line redrawn in place, cleared before any other output. */
+typedef struct progress {
+    int on;
+    size_t total, done, failed;
+    struct timespec start;
+} progress;
+
+static void progress_clear(const progress *b) {
+    if (b->on) fputs("\r\033[K", stderr);
+}
+
+static void progress_draw(const progress *b) {
+    if (!b->on) return;
+    double t = seconds_since(&b->start);
+    enum { WIDTH = 24 };
+    char bar[WIDTH + 1];
+    size_t fill = b->total ? b->done * WIDTH / b->total : WIDTH;
+    for (size_t i = 0; i < WIDTH; i++) bar[i] = i < fill ? '#' : '.';
+    bar[WIDTH] = '\0';
+    char eta[32] = "ETA ?";
+    double rate = t > 0 ? (double)b->done / t : 0.0;
+    if (b->done > 0 && rate > 0) snprintf(eta, sizeof eta, "ETA %.0f s", (double)(b->total - b->done) / rate);
+    fprintf(stderr, "\r\033[Ksweep [%s] %zu/%zu points", bar, b->done, b->total);
+    if (b->failed) fprintf(stderr, " (%zu failed)", b->failed);
+    fprintf(stderr, "  %.1f s  %.2f points/s  %s", t, rate, eta);
+    fflush(stderr);
+}
+/* }=== */
+
 /* One line per finished point (unless --quiet). */
 static void print_point(const sweep *s, size_t p, int status, double wall, long rss_kb) {
     if (s->cli->quiet) return;
@@ -719,8 +749,13 @@ static int run_points(const sweep *s, size_t first, size_t last) {
     if (!r) return -1;
     size_t next = first, active = 0;
     int failed = 0;
+    progress bar = {0};
+    bar.on = !s->cli->quiet && isatty(STDERR_FILENO);
+    bar.total = last - first;
+    clock_gettime(CLOCK_MONOTONIC, &bar.start);
     while (next < last || active > 0) {
         while (!failed && next < last && active < (size_t)s->jobs) {
+            progress_clear(&bar); /* a message of start_point starts its own line */
             if (start_point(s, next, &r[active]) != 0) {
                 failed = 1;
                 break;
@@ -731,9 +766,17 @@ static int run_points(const sweep *s, size_t first, size_t last) {
         if (active == 0) break;
         int status;
         struct rusage ru;
-        pid_t pid = wait4(-1, &status, 0, &ru);
+        progress_draw(&bar);
+        /* With a bar, poll so that its clock moves; else just wait. */
+        pid_t pid = wait4(-1, &status, bar.on ? WNOHANG : 0, &ru);
+        if (pid == 0) {
+            struct timespec nap = {0, 250000000};
+            nanosleep(&nap, NULL);
+            continue;
+        }
         if (pid < 0) {
             if (errno == EINTR) continue;
+            progress_clear(&bar);
             fprintf(stderr, "femlod: waiting for the points: %s\n", strerror(errno));
             free(r);
             return -1;
@@ -741,12 +784,16 @@ static int run_points(const sweep *s, size_t first, size_t last) {
         for (size_t i = 0; i < active; i++) {
             if (r[i].pid != pid) continue;
             double wall = seconds_since(&r[i].start);
+            progress_clear(&bar);
             if (write_run(s, r[i].point, status, &ru, wall) != 0) failed = 1;
             print_point(s, r[i].point, status, wall, ru.ru_maxrss);
+            bar.done++;
+            if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) bar.failed++;
             r[i] = r[--active];
             break;
         }
     }
+    progress_clear(&bar);
     free(r);
     return failed ? -1 : 0;
 }

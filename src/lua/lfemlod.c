@@ -13,6 +13,7 @@
 #include "lfemlod.h"
 
 #include <string.h>
+#include <unistd.h>
 
 /* Registry key of the message of the last FEMLOD_ELIMIT failure raised. */
 #define LIMIT_KEY "femlod.limit"
@@ -55,6 +56,15 @@ void fl_lua_io_hook(lua_State *L, const char *kind, int path, int object) {
     lua_pushvalue(L, path);
     lua_pushvalue(L, object);
     lua_call(L, 3, 0);
+}
+
+/* femlod._isatty(fd): whether file descriptor fd (1 standard output, 2
+ * standard error) is a terminal; femlod.progress draws its bar only then. */
+static int lib_isatty(lua_State *L) {
+    lua_Integer fd = luaL_checkinteger(L, 1);
+    luaL_argcheck(L, fd >= 0 && fd <= 2, 1, "0, 1 or 2 expected");
+    lua_pushboolean(L, isatty((int)fd));
+    return 1;
 }
 
 /* {====================================================================
@@ -112,6 +122,10 @@ FL_LUA_EXPORT int luaopen_femlod_report(lua_State *L);
 int luaopen_femlod_report(lua_State *L) {
     return open_helper(L, "femlod.report");
 }
+FL_LUA_EXPORT int luaopen_femlod_progress(lua_State *L);
+int luaopen_femlod_progress(lua_State *L) {
+    return open_helper(L, "femlod.progress");
+}
 FL_LUA_EXPORT int luaopen_femlod_sweep(lua_State *L);
 int luaopen_femlod_sweep(lua_State *L) {
     return open_helper(L, "femlod.sweep");
@@ -142,6 +156,8 @@ int luaopen_femlod(lua_State *L) {
         lua_rawseti(L, -2, i + 1);
     }
     lua_setfield(L, -2, "_VIEWER_PATHS");
+    lua_pushcfunction(L, lib_isatty);
+    lua_setfield(L, -2, "_isatty");
     /* femlod.report(mesh, opts): the helper's report function. */
     const fl_lua_chunk *c = find_chunk("femlod.report");
     if (c) {

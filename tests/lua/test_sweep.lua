@@ -264,6 +264,25 @@ do
 end
 -- }======
 
+-- {====== the progress bar: on stderr when it is a terminal (script(1) gives one), never else
+do
+  local dir = path("tty")
+  rmrf(dir)
+  local line = table.concat({ quote(FEMLOD), "sweep", quote(COPY), quote("mesh=" .. P.data .. "/tetra.off"),
+    "ext=off", "--grid", "levels=0,1", "--out", quote(dir) }, " ")
+  local code, out = sh("script -qec " .. quote(line) .. " /dev/null")
+  T.eq(code, 0, "sweep under a terminal")
+  T.check(out:find("\r\27%[Ksweep %[[#.]+%] 0/2 points  [%d.]+ s  0%.00 points/s  ETA %?"), "bar before a point ends")
+  T.check(out:find("\r\27%[Ksweep %[#+%.*%] 1/2 points  [%d.]+ s  [%d.]+ points/s  ETA %d+ s"), "bar with rate and ETA")
+  T.check(out:find("\27%[Kpoint 00%d levels=%d: ok"), "the bar is cleared before a point's line")
+  T.check(out:find("\r\27%[K2 points: 2 ok"), "and before the summary")
+  rmrf(dir)
+  code, out = sh("script -qec " .. quote(line:gsub("^(%S+) sweep", "%1 -q sweep")) .. " /dev/null")
+  T.eq(code, 0, "-q sweep under a terminal")
+  T.check(not out:find("sweep %["), "--quiet: no bar")
+end
+-- }======
+
 -- {====== usage errors: exit 2, nothing run
 local function usage(expect, ...)
   local code, out, err = run(...)
