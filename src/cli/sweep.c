@@ -1277,6 +1277,14 @@ int fl_sweep_main(lua_State *L, const fl_sweep_cli *c) {
         sweep_free(&s);
         return st;
     }
+    /* Every point would fail the same way: say it once. */
+    FILE *rf = fopen(s.recipe, "r");
+    if (!rf) {
+        fprintf(stderr, "femlod: %s: cannot open: %s\n", s.recipe, strerror(errno));
+        sweep_free(&s);
+        return 1;
+    }
+    fclose(rf);
     if (s.emit) {
         st = emit_jobs(&s);
         sweep_free(&s);

@@ -153,6 +153,14 @@ for i, r in ipairs(csvs[1]) do
     T.eq(csvs[2][i][k], r[k], "results.csv " .. k .. " identical at point " .. i - 1)
   end
 end
+-- A recipe that is not there: one message, nothing run.
+do
+  local code, out, err = run("sweep", path("missing.lua"), "--grid", "a=1,2", "--out", path("missing"))
+  T.eq(code, 1, "missing recipe: exit 1")
+  T.eq(out, "", "nothing run")
+  T.eq(err, "femlod: " .. path("missing.lua") .. ": cannot open: No such file or directory\n", "names the file")
+  T.check(not T.exists(path("missing") .. "/manifest.json"), "no manifest")
+end
 -- A second sweep into the same folder is refused (stale points would mix in).
 do
   local code, _, err = run("sweep", EXAMPLE, "--grid", "target=1500", "--out", path("example1"))
