@@ -371,7 +371,7 @@ end
 -- it; on any failure the temporary is removed and the error raised (level).
 local function need_files(level)
   if not (io_open and os_remove and os_rename and os_tmpname) then
-    error("HTML pages need the io and os libraries (io.open, os.remove, os.rename, os.tmpname)", level + 1)
+    error("HTML pages need the io and os libraries (io.open, os.remove, os.rename, os.tmpname)", level)
   end
 end
 
@@ -577,7 +577,7 @@ function M.report(mesh, opts)
   }
   if not opts.html then return summary end
 
-  need_files(2)
+  need_files(3)
   local js
   if opts.viewer ~= false then js = find_viewer(opts.viewer) end
   local title = opts.title or ("femlod report: " .. name)
