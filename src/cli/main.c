@@ -425,8 +425,9 @@ static int check_format(const char *key, const char *name) {
     return -1;
 }
 
-/* femlod.load(path, {format = format}); leaves the mesh on the stack. */
-static void load_mesh(lua_State *L, int module, const char *path, const char *format) {
+/* femlod.load(path, {format = format}); leaves the mesh on the stack (also
+ * report.c's, through sweep.h). */
+void fl_cli_load_mesh(lua_State *L, int module, const char *path, const char *format) {
     lua_getfield(L, module, "load");
     lua_pushstring(L, path);
     lua_createtable(L, 0, 1);
@@ -466,10 +467,10 @@ static int cmd_info(lua_State *L, const cli *c) {
     const char *path = c->argv[c->operand];
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);
-    load_mesh(L, module, path, format);
+    fl_cli_load_mesh(L, module, path, format);
     int mesh = lua_gettop(L);
     if (reference)
-        load_mesh(L, module, reference, NULL);
+        fl_cli_load_mesh(L, module, reference, NULL);
     else
         lua_pushnil(L);
     call_method(L, mesh, "quality", 1, 1);
@@ -502,7 +503,7 @@ static int cmd_convert(lua_State *L, const cli *c) {
     const char *in = c->argv[c->operand], *out = c->argv[c->operand + 1];
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);
-    load_mesh(L, module, in, input_format);
+    fl_cli_load_mesh(L, module, in, input_format);
     int mesh = lua_gettop(L);
     lua_pushstring(L, out);
     lua_createtable(L, 0, 3);
@@ -713,7 +714,7 @@ static int cmd_simplify(lua_State *L, const cli *c) {
 
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);
-    load_mesh(L, module, in, NULL);
+    fl_cli_load_mesh(L, module, in, NULL);
     int mesh = lua_gettop(L);
     /* The lock indices against the mesh: a usage error too. */
     if (lua_getfield(L, opts, "lock") == LUA_TTABLE) {

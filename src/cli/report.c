@@ -63,16 +63,12 @@ int fl_report_main(lua_State *L, const fl_sweep_cli *c) {
 
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);
-    lua_getfield(L, module, "load");
-    lua_pushstring(L, mesh);
-    lua_call(L, 1, 1);
+    fl_cli_load_mesh(L, module, mesh, NULL);
     int m = lua_gettop(L);
     lua_createtable(L, 0, 5);
     int opts = lua_gettop(L);
     if (ref) {
-        lua_getfield(L, module, "load");
-        lua_pushstring(L, ref);
-        lua_call(L, 1, 1);
+        fl_cli_load_mesh(L, module, ref, NULL);
         lua_setfield(L, opts, "reference");
         lua_pushstring(L, base_name(ref));
         lua_setfield(L, opts, "reference_name");

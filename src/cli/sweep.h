@@ -22,6 +22,10 @@ __attribute__((format(printf, 1, 2)))
 #endif
 int fl_cli_usage_error(const char *fmt, ...);
 
+/* femlod.load(path, {format = format}) with the module table at index
+ * module; leaves the mesh on the stack (main.c). */
+void fl_cli_load_mesh(lua_State *L, int module, const char *path, const char *format);
+
 /* `femlod sweep RECIPE.lua ...`: returns the exit status (0 every point ran
  * and succeeded, 1 some point failed or crashed, 2 usage error). Runs in the
  * program's Lua state (for the number syntax and the report page). */

@@ -8,7 +8,7 @@ local progress = require "femlod.progress"
 
 local P = params
 assert(P and P.femlod and P.tmp and P.shared, "run through ctest: needs femlod=, tmp=, shared=")
-local function quote(s) return "'" .. tostring(s):gsub("'", "'\\''") .. "'" end
+local quote = T.quote
 
 -- A stream that keeps what is written.
 local function sink()

@@ -11,17 +11,9 @@ local sweep = require "femlod.sweep"
 local P = params
 assert(P and P.femlod and P.tmp and P.shared and P.examples, "run through ctest: needs femlod=, tmp=, shared=, examples=")
 local function path(name) return P.tmp .. "/report_" .. name end
-local function quote(s) return "'" .. tostring(s):gsub("'", "'\\''") .. "'" end
-local ERR = path("stderr.txt")
-local function run(...)
-  local parts = { quote(P.femlod) }
-  for i = 1, select("#", ...) do parts[#parts + 1] = quote((select(i, ...))) end
-  local p = assert(io.popen(table.concat(parts, " ") .. " 2>" .. quote(ERR) .. " </dev/null", "r"))
-  local out = p:read("a")
-  local _, how, code = p:close()
-  T.check(how == "exit", "ended by a signal")
-  return code, out, T.readfile(ERR) or ""
-end
+local quote = T.quote
+local R = T.runner(P.femlod, path("stderr.txt"))
+local run = R.run
 local function count(s, pat)
   local n = 0
   for _ in s:gmatch(pat) do n = n + 1 end
@@ -235,12 +227,7 @@ do
   code, out = run("-q", "report", small)
   T.eq(code, 0, "-q report")
   T.eq(out, "", "-q prints nothing")
-  local function usage(expect, ...)
-    local c, o, e = run(...)
-    T.eq(c, 2, "exit 2: " .. table.concat({ ... }, " "))
-    T.eq(o, "", "stdout empty")
-    T.eq(e:match("^[^\n]*"), expect, "message")
-  end
+  local usage = R.usage
   usage("femlod: missing a mesh file", "report")
   usage("femlod: report: MESH comes first, then the options", "report", "--html", "x.html")
   usage("femlod: --html needs a value", "report", small, "--html")

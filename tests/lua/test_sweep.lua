@@ -10,22 +10,9 @@ local P = params
 assert(P and P.femlod and P.tmp and P.shared and P.examples, "run through ctest: needs femlod=, tmp=, shared=, examples=")
 local FEMLOD = P.femlod
 local function path(name) return P.tmp .. "/sweep_" .. name end
-local function quote(s) return "'" .. tostring(s):gsub("'", "'\\''") .. "'" end
-
-local ERR = path("stderr.txt")
--- Runs a shell command line; returns exit code, stdout, stderr.
-local function sh(line)
-  local p = assert(io.popen(line .. " 2>" .. quote(ERR) .. " </dev/null", "r"))
-  local out = p:read("a")
-  local _, how, code = p:close()
-  T.check(how == "exit", "ended by a signal: " .. tostring(code))
-  return code, out, T.readfile(ERR) or ""
-end
-local function run(...)
-  local parts = { quote(FEMLOD) }
-  for i = 1, select("#", ...) do parts[#parts + 1] = quote((select(i, ...))) end
-  return sh(table.concat(parts, " "))
-end
+local quote = T.quote
+local R = T.runner(FEMLOD, path("stderr.txt"))
+local sh, run = R.sh, R.run
 local function rmrf(p) os.execute("rm -rf " .. quote(p)) end
 
 -- The SHA-256 that coreutils computes, to check the manifest's.
@@ -292,12 +279,7 @@ end
 -- }======
 
 -- {====== usage errors: exit 2, nothing run
-local function usage(expect, ...)
-  local code, out, err = run(...)
-  T.eq(code, 2, "exit 2 for: " .. table.concat({ ... }, " "))
-  T.eq(out, "", "nothing on stdout")
-  T.eq(err:match("^[^\n]*"), expect, "message")
-end
+local usage = R.usage
 usage("femlod: missing a recipe", "sweep")
 usage("femlod: --grid: name=v1,v2,... expected, got 'target'", "sweep", COPY, "--grid", "target")
 usage("femlod: --grid target: empty value in '1,,2'", "sweep", COPY, "--grid", "target=1,,2")
