@@ -122,13 +122,25 @@ static int write_json(const char *path, const cJSON *j) {
     return st;
 }
 
-static cJSON *read_json(const char *path) {
+/* A JSON object from a file; NULL when the file is missing, or when it is
+ * not a JSON object (then *malformed is set, when given). */
+static cJSON *read_json_object(const char *path, int *malformed) {
     char *data;
     size_t size;
+    if (malformed) *malformed = 0;
     if (fl_file_read_all(path, &data, &size, NULL) != FEMLOD_OK) return NULL;
     cJSON *j = cJSON_ParseWithLength(data, size);
     free(data);
+    if (!cJSON_IsObject(j)) {
+        cJSON_Delete(j);
+        if (malformed) *malformed = 1;
+        return NULL;
+    }
     return j;
+}
+
+static cJSON *read_json(const char *path) {
+    return read_json_object(path, NULL);
 }
 
 static int make_dir(const char *path) {
@@ -860,18 +872,26 @@ static int collect_point(lua_State *L, const sweep *s, size_t p, cJSON *points, 
         snprintf(name, sizeof name, "%.*s", (int)s->axes[a].name_len, s->axes[a].name);
         cJSON_AddItemToObject(params, name, json_word(L, s->axes[a].values[axis_index(s, p, a)]));
     }
+    int bad_run, bad_rec;
     point_path(s, p, "run.json", path, sizeof path);
-    cJSON *run = read_json(path);
+    cJSON *run = read_json_object(path, &bad_run);
     point_path(s, p, "record.json", path, sizeof path);
-    cJSON *rec = read_json(path);
+    cJSON *rec = read_json_object(path, &bad_rec);
 
     const char *status = "ok";
     char *error = NULL;
     cJSON *ex = run ? cJSON_GetObjectItemCaseSensitive(run, "exit") : NULL;
     cJSON *sig = run ? cJSON_GetObjectItemCaseSensitive(run, "signal") : NULL;
     cJSON *rerr = rec ? cJSON_GetObjectItemCaseSensitive(rec, "error") : NULL;
-    char buf[256];
-    if (!run) {
+    char buf[PATH_MAX + 128];
+    if (bad_run || bad_rec) {
+        status = "failed";
+        point_path(s, p, bad_run ? "run.json" : "record.json", path, sizeof path);
+        snprintf(buf, sizeof buf, "%s: not a JSON object (damaged?)", relative_to_out(s, path));
+        error = strdup(buf);
+        cJSON_Delete(rec);
+        rec = NULL;
+    } else if (!run) {
         status = "not run";
     } else if (cJSON_IsNumber(sig)) {
         status = "crashed";

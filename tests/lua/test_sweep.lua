@@ -247,6 +247,20 @@ do
   local rows = read_csv(jobs .. "/results.csv")
   T.eq(rows[6].triangles, "64", "tetra at 2 levels: 4 * 16 triangles")
   T.eq(rows[6].mesh, "points/005/fine.ply", "paths relative to the sweep folder")
+  -- A damaged record or run file: that point failed, named, the others still count.
+  local rec3 = jobs .. "/points/003/record.json"
+  local saved = T.readfile(rec3)
+  T.writefile(rec3, '{"femlod": "femlod 0.1.0", "reads": [')
+  T.writefile(jobs .. "/points/004/run.json", "[1, 2]")
+  code, out = run(table.unpack(a))
+  T.eq(code, 1, "--collect with damaged files: exit 1")
+  T.check(out:find("6 points: 4 ok, 2 failed"), out)
+  rows = read_csv(jobs .. "/results.csv")
+  T.eq(rows[4].status, "failed", "damaged record: failed")
+  T.eq(rows[4].error, "points/003/record.json: not a JSON object (damaged?)", "names the file")
+  T.eq(rows[5].error, "points/004/run.json: not a JSON object (damaged?)", "names the run file")
+  T.eq(rows[6].status, "ok", "the others are unaffected")
+  T.writefile(rec3, saved)
   -- --collect before the points ran says so.
   local none = path("none")
   rmrf(none)
