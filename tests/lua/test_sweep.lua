@@ -167,12 +167,12 @@ if params.mode == "crash" then
 end
 if params.mode == "exit" then os.exit(0) end
 m:save(params.out_dir .. "/copy.off")
-require("femlod.sweep").record { mode = params.mode, scale = params.scale }
+require("femlod.sweep").record { mode = params.mode, scale = params.scale, r = math.random(1000000) }
 ]])
 do
   local dir = path("crash")
   rmrf(dir)
-  local code, out, err = run("sweep", CRASH, "mesh=" .. P.shared .. "/fandisk.obj", "scale=2.5",
+  local code, out, err = R.run("--seed", "7", "sweep", CRASH, "mesh=" .. P.shared .. "/fandisk.obj", "scale=2.5",
     "--grid", "mode=ok,error,crash,exit", "--out", dir, "--jobs", "4")
   T.eq(code, 1, "a point failed: exit 1")
   T.eq(err, "", "the sweep itself says nothing on stderr")
@@ -183,6 +183,9 @@ do
   T.eq(rows[1].status, "ok", "ok point")
   T.eq(rows[1]["recorded.mode"], "ok", "recorded string")
   T.eq(rows[1]["recorded.scale"], "2.5", "fixed pair arrives as a number")
+  local _, seven = run("--seed", "7", "-e", "print(math.random(1000000))")
+  T.eq(rows[1]["recorded.r"] .. "\n", seven, "--seed reaches the points")
+  T.check(T.readfile(dir .. "/manifest.json"):find('"seed":%s*7,'), "seed in the manifest")
   T.eq(rows[1].triangles, "12946", "copy's triangles")
   T.eq(rows[2].status, "failed", "error point")
   T.eq(rows[2].error, CRASH .. ":2: point failed on purpose", "the recipe's message")
