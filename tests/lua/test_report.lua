@@ -141,6 +141,20 @@ do
 end
 -- }======
 
+-- {====== an empty mesh: a page all the same
+do
+  local empty = femlod.mesh {}
+  local ep = path("empty.html")
+  local r = femlod.report(empty, { html = ep, viewer = false })
+  T.eq(r.quality.triangles, 0, "no triangles")
+  T.eq(#r.histograms.valence, 0, "no valences")
+  local s = T.readfile(ep)
+  T.check(s and s:find("</html>\n$"), "complete page")
+  T.eq(count(s, '<rect class="bar"'), 20, "empty stretch and size bins, no valence bars")
+  os.remove(ep)
+end
+-- }======
+
 -- {====== argument errors
 T.checkerr("test_report%.lua:%d+: bad argument #1 to 'report' %(femlod.Mesh expected, got nil%)",
   function() femlod.report() end)
