@@ -12,6 +12,7 @@
  */
 #include "lua/lfemlod.h"
 #include "sandbox.h"
+#include "sweep.h"
 
 #include <lualib.h>
 
@@ -26,7 +27,7 @@
 enum { EXIT_OK = 0, EXIT_ERROR = 1, EXIT_USAGE = 2, EXIT_LIMIT = 3 };
 
 typedef enum command {
-    CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY, CMD_LOD
+    CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY, CMD_LOD, CMD_SWEEP, CMD_REPORT
 } command;
 
 /* What the command line asked for. Indices point into argv. */
@@ -35,6 +36,7 @@ typedef struct cli {
     char **argv;
     lua_Integer seed;
     int quiet, traceback;
+    const char *record; /* --record FILE, or NULL */
     command cmd;
     int script;     /* argv index that becomes arg[0] (lua.c's convention); 0 for -e */
     int operand;    /* first operand: recipe, code, mesh or input */
@@ -68,6 +70,18 @@ static void usage_text(FILE *f) {
           "                   result, refined where a vertex's e_size (mean edge\n"
           "                   length) exceeds T; 0 gives the input, inf the\n"
           "                   simplification result; also size=T\n"
+          "  sweep RECIPE.lua [name=value ...] --grid NAME=V1,V2,... [--grid ...]\n"
+          "                   run the recipe once per grid point (the last --grid\n"
+          "                   varies fastest), each in its own process; writes\n"
+          "                   DIR/points/NNN/, DIR/manifest.json, DIR/results.csv\n"
+          "                   --jobs N (default 2)  --out DIR (default sweep)\n"
+          "                   --emit-jobs (print one command per point instead)\n"
+          "                   --point N (run point N only)  --collect (write the\n"
+          "                   manifest from the points already run)\n"
+          "  report MESH [--reference ORIGINAL] [--html OUT.html] [--no-viewer]\n"
+          "                   print the quality report and Table 1 rows (and the\n"
+          "                   deviation from ORIGINAL); write an HTML page with\n"
+          "                   histograms and the mesh in a 3D viewer\n"
           "  help             print this help\n"
           "\n"
           "Options:\n"
@@ -80,6 +94,8 @@ static void usage_text(FILE *f) {
           "  --allow DIR      with --sandbox: let the recipe read and write DIR\n"
           "  --max-memory SIZE  stop (exit 3) past SIZE bytes (suffix K, M, G)\n"
           "  --max-time SECONDS stop (exit 3) after SECONDS of wall-clock time\n"
+          "  --record FILE    run: also write FILE, a JSON record of the parameters,\n"
+          "                   the files read and written (SHA-256) and the meshes saved\n"
           "  -h, --help       print this help and exit\n"
           "  -v, --version    print the version and exit\n"
           "\n"
@@ -93,18 +109,33 @@ static void usage_text(FILE *f) {
 
 /* A usage error: one line naming the problem, one pointing at the help. */
 #if defined(__GNUC__)
+__attribute__((format(printf, 1, 0)))
+#endif
+static void usage_errorv(const char *fmt, va_list ap) {
+    fputs(PROGNAME ": ", stderr);
+    vfprintf(stderr, fmt, ap);
+    fputs("\nusage: " PROGNAME " [options] COMMAND [ARGS] [name=value ...]"
+          " (try '" PROGNAME " --help')\n",
+          stderr);
+    fflush(stderr);
+}
+
+#if defined(__GNUC__)
 __attribute__((format(printf, 1, 2)))
 #endif
 static int usage_error(const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
-    fputs(PROGNAME ": ", stderr);
-    vfprintf(stderr, fmt, ap);
+    usage_errorv(fmt, ap);
     va_end(ap);
-    fputs("\nusage: " PROGNAME " [options] COMMAND [ARGS] [name=value ...]"
-          " (try '" PROGNAME " --help')\n",
-          stderr);
-    fflush(stderr);
+    return EXIT_USAGE;
+}
+
+int fl_cli_usage_error(const char *fmt, ...) {
+    va_list ap;
+    va_start(ap, fmt);
+    usage_errorv(fmt, ap);
+    va_end(ap);
     return EXIT_USAGE;
 }
 
@@ -184,6 +215,14 @@ static int parse_args(lua_State *L, cli *c) {
             c->quiet = 1;
         } else if (strcmp(a, "--traceback") == 0) {
             c->traceback = 1;
+        } else if (strcmp(a, "--record") == 0 || strncmp(a, "--record=", 9) == 0) {
+            if (a[8] == '=') {
+                c->record = a + 9;
+            } else {
+                if (i + 1 >= c->argc) return usage_error("%s needs a value", a);
+                c->record = c->argv[++i];
+            }
+            if (!*c->record) return usage_error("--record: file name expected, got ''");
         } else if (strcmp(a, "--seed") == 0) {
             if (i + 1 >= c->argc) return usage_error("%s needs a value", a);
             int st = parse_seed(L, c, c->argv[++i]);
@@ -228,6 +267,10 @@ static int parse_args(lua_State *L, cli *c) {
     } else if (strcmp(w, "lod") == 0) {
         c->cmd = CMD_LOD;
         need = 2;
+    } else if (strcmp(w, "sweep") == 0) {
+        c->cmd = CMD_SWEEP;
+    } else if (strcmp(w, "report") == 0) {
+        c->cmd = CMD_REPORT;
     } else if (strcmp(w, "help") == 0) {
         usage_text(stdout);
         return EXIT_OK;
@@ -243,7 +286,8 @@ static int parse_args(lua_State *L, cli *c) {
         static const char *const what[] = {"", "a recipe", "a line of Lua", "a mesh file",
                                            "an input and an output file",
                                            "an input and an output file",
-                                           "a hierarchy file and an output file"};
+                                           "a hierarchy file and an output file",
+                                           "a recipe", "a mesh file"};
         return usage_error("missing %s", what[c->cmd]);
     }
     c->pairs = c->operand + (need ? need : 1);
@@ -252,6 +296,7 @@ static int parse_args(lua_State *L, cli *c) {
         return usage_error("%s applies to run and -e only", confine);
     if (confine && strcmp(confine, "--allow") == 0) return usage_error("--allow needs --sandbox");
     c->script = c->cmd == CMD_RUN ? c->operand : 0;
+    if (c->record && c->cmd != CMD_RUN) return usage_error("--record goes with run only");
     return -1;
 }
 
@@ -340,6 +385,12 @@ static void set_arg_table(lua_State *L, const cli *c) {
     lua_setglobal(L, "arg");
 }
 
+/* --record: the record starts before the chunk runs (argument: the recipe's path). */
+static int record_start(lua_State *L) {
+    fl_record_start(L, lua_tostring(L, 1));
+    return 0;
+}
+
 /* Runs a recipe or a line of code with params and arg set, the module in
  * the global `femlod`, math.random seeded, and the sandbox and caps in
  * force when asked for. */
@@ -367,13 +418,24 @@ static int cmd_lua(lua_State *L, const cli *c) {
         /* Text only: bytecode can crash the interpreter (manual, load). */
         status = luaL_loadfilex(L, strcmp(src, "-") == 0 ? NULL : src, "t");
     }
-    if (status != LUA_OK) return report(L);
+    if (status == LUA_OK && c->record) {
+        lua_pushcfunction(L, record_start);
+        lua_pushstring(L, strcmp(src, "-") == 0 ? NULL : src);
+        status = docall(L, 1, c->traceback);
+    }
+    if (status != LUA_OK) {
+        if (c->record) fl_record_write(L, c->record, lua_tostring(L, -1));
+        return report(L);
+    }
     /* The pairs are also the chunk's varargs, as script arguments are in lua.c. */
     int n = c->argc - c->pairs;
     luaL_checkstack(L, n + 3, "too many parameters"); /* a C function gets only LUA_MINSTACK */
     for (int i = c->pairs; i < c->argc; i++) lua_pushstring(L, c->argv[i]);
-    if (docall(L, n, c->traceback) != LUA_OK) return report(L);
-    return EXIT_OK;
+    status = docall(L, n, c->traceback);
+    /* The record is written either way: a failed point's reads are worth keeping. */
+    int rec = c->record ? fl_record_write(L, c->record, status == LUA_OK ? NULL : lua_tostring(L, -1)) : 0;
+    if (status != LUA_OK) return report(L);
+    return rec ? EXIT_ERROR : EXIT_OK;
 }
 
 /* }==================================================================== */
@@ -425,8 +487,9 @@ static int check_format(const char *key, const char *name) {
     return -1;
 }
 
-/* femlod.load(path, {format = format}); leaves the mesh on the stack. */
-static void load_mesh(lua_State *L, int module, const char *path, const char *format) {
+/* femlod.load(path, {format = format}); leaves the mesh on the stack (also
+ * report.c's, through sweep.h). */
+void fl_cli_load_mesh(lua_State *L, int module, const char *path, const char *format) {
     lua_getfield(L, module, "load");
     lua_pushstring(L, path);
     lua_createtable(L, 0, 1);
@@ -466,10 +529,10 @@ static int cmd_info(lua_State *L, const cli *c) {
     const char *path = c->argv[c->operand];
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);
-    load_mesh(L, module, path, format);
+    fl_cli_load_mesh(L, module, path, format);
     int mesh = lua_gettop(L);
     if (reference)
-        load_mesh(L, module, reference, NULL);
+        fl_cli_load_mesh(L, module, reference, NULL);
     else
         lua_pushnil(L);
     call_method(L, mesh, "quality", 1, 1);
@@ -502,7 +565,7 @@ static int cmd_convert(lua_State *L, const cli *c) {
     const char *in = c->argv[c->operand], *out = c->argv[c->operand + 1];
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);
-    load_mesh(L, module, in, input_format);
+    fl_cli_load_mesh(L, module, in, input_format);
     int mesh = lua_gettop(L);
     lua_pushstring(L, out);
     lua_createtable(L, 0, 3);
@@ -713,7 +776,7 @@ static int cmd_simplify(lua_State *L, const cli *c) {
 
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);
-    load_mesh(L, module, in, NULL);
+    fl_cli_load_mesh(L, module, in, NULL);
     int mesh = lua_gettop(L);
     /* The lock indices against the mesh: a usage error too. */
     if (lua_getfield(L, opts, "lock") == LUA_TTABLE) {
@@ -734,8 +797,29 @@ static int cmd_simplify(lua_State *L, const cli *c) {
     }
     lua_pop(L, 1);
 
+    /* A progress bar on stderr when it is a terminal (femlod.progress). */
+    int bar = 0;
+    if (!c->quiet) {
+        lua_getglobal(L, "require");
+        lua_pushliteral(L, "femlod.progress");
+        lua_call(L, 1, 1);
+        lua_getfield(L, -1, "bar");
+        lua_createtable(L, 0, 1);
+        lua_pushliteral(L, "simplify");
+        lua_setfield(L, -2, "label");
+        lua_call(L, 1, 1);
+        lua_remove(L, -2);
+        bar = lua_gettop(L);
+        lua_getfield(L, bar, "update");
+        lua_setfield(L, opts, "progress");
+    }
     lua_pushvalue(L, opts);
     call_method(L, mesh, "simplify", 1, 1);
+    if (bar) {
+        lua_pushvalue(L, bar);
+        call_method(L, lua_gettop(L), "close", 0, 0);
+        lua_pop(L, 1);
+    }
     int h = lua_gettop(L);
     call_method(L, h, "mesh", 0, 1);
     int result = lua_gettop(L);
@@ -917,6 +1001,12 @@ static int pmain(lua_State *L) {
         case CMD_CONVERT: st = cmd_convert(L, &c); break;
         case CMD_SIMPLIFY: st = cmd_simplify(L, &c); break;
         case CMD_LOD: st = cmd_lod(L, &c); break;
+        case CMD_SWEEP:
+        case CMD_REPORT: {
+            fl_sweep_cli sc = {c.argc, c.argv, c.operand, c.seed, c.quiet, c.traceback};
+            st = c.cmd == CMD_SWEEP ? fl_sweep_main(L, &sc) : fl_report_main(L, &sc);
+            break;
+        }
         case CMD_NONE: st = EXIT_USAGE; break;
         }
     }

@@ -13,6 +13,7 @@
 #include "lfemlod.h"
 
 #include <string.h>
+#include <unistd.h>
 
 /* Registry key of the message of the last FEMLOD_ELIMIT failure raised. */
 #define LIMIT_KEY "femlod.limit"
@@ -116,6 +117,28 @@ void fl_lua_reserve(lua_State *L, double bytes) {
 
 /* }==================================================================== */
 
+void fl_lua_io_hook(lua_State *L, const char *kind, int path, int object) {
+    path = lua_absindex(L, path);
+    object = lua_absindex(L, object);
+    if (lua_getfield(L, LUA_REGISTRYINDEX, FL_IO_HOOK) != LUA_TFUNCTION) {
+        lua_pop(L, 1);
+        return;
+    }
+    lua_pushstring(L, kind);
+    lua_pushvalue(L, path);
+    lua_pushvalue(L, object);
+    lua_call(L, 3, 0);
+}
+
+/* femlod._isatty(fd): whether file descriptor fd (1 standard output, 2
+ * standard error) is a terminal; femlod.progress draws its bar only then. */
+static int lib_isatty(lua_State *L) {
+    lua_Integer fd = luaL_checkinteger(L, 1);
+    luaL_argcheck(L, fd >= 0 && fd <= 2, 1, "0, 1 or 2 expected");
+    lua_pushboolean(L, isatty((int)fd));
+    return 1;
+}
+
 /* {====================================================================
  * Embedded helpers
  * ===================================================================== */
@@ -171,6 +194,14 @@ FL_LUA_EXPORT int luaopen_femlod_report(lua_State *L);
 int luaopen_femlod_report(lua_State *L) {
     return open_helper(L, "femlod.report");
 }
+FL_LUA_EXPORT int luaopen_femlod_progress(lua_State *L);
+int luaopen_femlod_progress(lua_State *L) {
+    return open_helper(L, "femlod.progress");
+}
+FL_LUA_EXPORT int luaopen_femlod_sweep(lua_State *L);
+int luaopen_femlod_sweep(lua_State *L) {
+    return open_helper(L, "femlod.sweep");
+}
 
 /* }==================================================================== */
 
@@ -182,5 +213,36 @@ int luaopen_femlod(lua_State *L) {
     fl_lhierarchy_open(L);
     lua_pushliteral(L, "femlod " FEMLOD_VERSION_STRING);
     lua_setfield(L, -2, "_VERSION");
+    /* Where femlod.report looks for the 3D viewer of its HTML pages. */
+    static const char *const viewer_paths[] = {
+#ifdef FEMLOD_VIEWER_BUILD
+        FEMLOD_VIEWER_BUILD,
+#endif
+#ifdef FEMLOD_VIEWER_INSTALL
+        FEMLOD_VIEWER_INSTALL,
+#endif
+        NULL};
+    lua_newtable(L);
+    for (int i = 0; viewer_paths[i]; i++) {
+        lua_pushstring(L, viewer_paths[i]);
+        lua_rawseti(L, -2, i + 1);
+    }
+    lua_setfield(L, -2, "_VIEWER_PATHS");
+    lua_pushcfunction(L, lib_isatty);
+    lua_setfield(L, -2, "_isatty");
+    /* femlod.report(mesh, opts): the helper's report function. */
+    const fl_lua_chunk *c = find_chunk("femlod.report");
+    if (c) {
+        luaL_getsubtable(L, LUA_REGISTRYINDEX, LUA_LOADED_TABLE);
+        if (lua_getfield(L, -1, "femlod.report") != LUA_TTABLE) {
+            lua_pop(L, 1);
+            run_chunk(L, c);
+            lua_pushvalue(L, -1);
+            lua_setfield(L, -3, "femlod.report");
+        }
+        lua_getfield(L, -1, "report");
+        lua_setfield(L, -4, "report");
+        lua_pop(L, 2);
+    }
     return 1;
 }

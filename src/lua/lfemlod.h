@@ -99,6 +99,14 @@ FL_LUA_INTERNAL void fl_lua_reserve(lua_State *L, double bytes);
 FL_LUA_INTERNAL int fl_lua_raise_limit(lua_State *L, int level, const char *msg);
 
 /* }====== */
+/* The file log of `femlod run --record` (femlod.sweep): when the registry
+ * holds a function under FL_IO_HOOK, the functions that read or write files
+ * (femlod.load, m:save, femlod.load_hierarchy, h:save) call it after each
+ * success as hook(kind, path, object), kind "read" or "write", the path as
+ * given and the object read or saved. Leaves the stack as it found it; an
+ * error in the hook propagates. Without a hook it costs one table lookup. */
+#define FL_IO_HOOK "femlod.io_hook"
+FL_LUA_INTERNAL void fl_lua_io_hook(lua_State *L, const char *kind, int path, int object);
 
 /* {====== femlod.Mesh (lmesh.c) */
 

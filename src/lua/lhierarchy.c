@@ -393,6 +393,7 @@ static int lib_load_hierarchy(lua_State *L) {
         return fl_lua_raise(L, &err);
     }
     h->has_result = !result_is_none(&h->result);
+    fl_lua_io_hook(L, "read", 1, -1);
     return 1;
 }
 
@@ -1121,6 +1122,7 @@ static int hierarchy_save(lua_State *L) {
     femlod_error err;
     if (femlod_hierarchy_save(h->hier, path, h->has_result ? &h->result : NULL, &err) != FEMLOD_OK)
         return fl_lua_raise(L, &err);
+    fl_lua_io_hook(L, "write", 2, 1);
     return 0;
 }
 

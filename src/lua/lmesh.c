@@ -77,6 +77,7 @@ static int lib_load(lua_State *L) {
     femlod_error err;
     if (femlod_mesh_read(slot, path, &opts, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
     fl_lmesh_charge(L, slot);
+    fl_lua_io_hook(L, "read", 1, -1);
     return 1;
 }
 
@@ -427,6 +428,7 @@ static int mesh_save(lua_State *L) {
     m = fl_lmesh_check(L, 1); /* a set function may have closed it */
     femlod_error err;
     if (femlod_mesh_write(m, path, &opts, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    fl_lua_io_hook(L, "write", 2, 1);
     return 0;
 }
 

@@ -127,6 +127,39 @@ function M.exists(path)
   return false
 end
 
+-- s single-quoted for sh.
+function M.quote(s)
+  return "'" .. tostring(s):gsub("'", "'\\''") .. "'"
+end
+
+-- A shell runner whose stderr goes to errfile: runner.sh(line) runs a
+-- command line, runner.run(...) the program with the words as arguments
+-- (quoted); each returns exit code, stdout, stderr. A signal is a failure.
+function M.runner(program, errfile)
+  local r = {}
+  function r.sh(line)
+    local p = assert(io.popen(line .. " 2>" .. M.quote(errfile) .. " </dev/null", "r"))
+    local out = p:read("a")
+    local _, how, code = p:close()
+    if how ~= "exit" then fail(2, "ended by signal %s: %s", tostring(code), line) end
+    return code, out, M.readfile(errfile) or ""
+  end
+  function r.run(...)
+    local parts = { M.quote(program) }
+    for i = 1, select("#", ...) do parts[#parts + 1] = M.quote((select(i, ...))) end
+    return r.sh(table.concat(parts, " "))
+  end
+  -- A usage error: exit 2, nothing on stdout, expect as stderr's first line.
+  function r.usage(expect, ...)
+    local code, out, err = r.run(...)
+    local args = table.concat({ ... }, " ")
+    M.eq(code, 2, "exit 2 for: " .. args)
+    M.eq(out, "", "nothing on stdout for: " .. args)
+    M.eq(err:match("^[^\n]*"), expect, "message for: " .. args)
+  end
+  return r
+end
+
 -- The closing line CI reads; raises (level 0: no position) on any failure.
 function M.summary(name)
   print(string.format("%d passed, %d failed", M.passed, M.failed))
