@@ -4,12 +4,15 @@
  * Written: *NODE with NSET=NALL (ids 1..nv), *ELEMENT TYPE=S3 with
  * ELSET=EALL (ids 1..nt, corners in the mesh's order, so the shell normal
  * follows the triangle winding), *NSET NBOUNDARY with the nodes of the
- * boundary edges (edges of one triangle) when there are any, then the
- * caller's node and element sets. No material, section or step: the file is
+ * boundary edges (edges of one triangle) when there are any, *NSET
+ * NFEATURE with the nodes of feature edges (boundary, non-manifold, or a
+ * dihedral angle between normals above 40 degrees, the simplifier's
+ * default), then the caller's node and element sets. No material, section or step: the file is
  * meant for *INCLUDE, INPUT=... from the analysis deck. Data lines hold at
  * most 10 ids, which keeps them under CalculiX's 132 characters. */
 #include "core.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -23,7 +26,7 @@ static int same_name(const char *a, const char *b) {
     return *a == *b;
 }
 
-static const char *const reserved[] = {"NALL", "EALL", "NBOUNDARY", NULL};
+static const char *const reserved[] = {"NALL", "EALL", "NBOUNDARY", "NFEATURE", NULL};
 
 /* The sets' names and indices are valid: checked before anything is written. */
 static femlod_status check_sets(const femlod_index_set *sets, size_t count, size_t limit,
@@ -51,7 +54,7 @@ static femlod_status check_sets(const femlod_index_set *sets, size_t count, size
         for (const char *const *r = reserved; *r; r++)
             if (same_name(name, *r))
                 return fl_error(err, FEMLOD_EINPUT,
-                                "%s: %s set name '%s' is reserved (NALL, EALL, NBOUNDARY)", path,
+                                "%s: %s set name '%s' is reserved (NALL, EALL, NBOUNDARY, NFEATURE)", path,
                                 kind, name);
         for (size_t j = 0; j < i; j++)
             if (same_name(name, sets[j].name))
@@ -100,29 +103,67 @@ static femlod_status put_set(FILE *fp, const char *keyword, const femlod_index_s
     return FEMLOD_OK;
 }
 
-/* The nodes of boundary edges, sorted (none when the surface is closed). */
-static femlod_status boundary_nodes(const femlod_mesh *m, uint32_t **out, size_t *count,
-                                    femlod_error *err) {
-    uint32_t *sides;
-    size_t ns;
-    femlod_status st = fl_io_boundary_sides(m, &sides, &ns, err);
+/* The nodes of boundary edges (one triangle) and of feature edges: those,
+ * non-manifold edges (three or more triangles) and edges whose two
+ * triangles' normals differ by more than FEATURE_ANGLE degrees; each list
+ * sorted. */
+#define FEATURE_ANGLE 40.0
+
+static void normal(const femlod_mesh *m, uint32_t t, double n[3]) {
+    const uint32_t *c = m->tri + 3 * (size_t)t;
+    const double *a = m->pos + 3 * (size_t)c[0], *b = m->pos + 3 * (size_t)c[1],
+                 *d = m->pos + 3 * (size_t)c[2];
+    double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    double v[3] = {d[0] - a[0], d[1] - a[1], d[2] - a[2]};
+    n[0] = u[1] * v[2] - u[2] * v[1];
+    n[1] = u[2] * v[0] - u[0] * v[2];
+    n[2] = u[0] * v[1] - u[1] * v[0];
+}
+
+static femlod_status edge_nodes(const femlod_mesh *m, uint32_t **bnd, size_t *nb, uint32_t **feat,
+                                size_t *nf, femlod_error *err) {
+    fl_adjacency adj;
+    femlod_status st = fl_adjacency_build(&adj, m->tri, m->nt, m->nv, err);
     if (st != FEMLOD_OK) return st;
     unsigned char *on = fl_calloc(m->nv, 1);
-    uint32_t *ids = fl_alloc(m->nv, sizeof *ids);
-    if (!on || !ids) {
+    uint32_t *b = fl_alloc(m->nv, sizeof *b), *f = fl_alloc(m->nv, sizeof *f);
+    if (!on || !b || !f) {
         free(on);
-        free(ids);
-        free(sides);
+        free(b);
+        free(f);
+        fl_adjacency_free(&adj);
         return fl_error(err, FEMLOD_ENOMEM, "out of memory");
     }
-    for (size_t i = 0; i < 2 * ns; i++) on[sides[i]] = 1;
-    size_t n = 0;
-    for (size_t v = 0; v < m->nv; v++)
-        if (on[v]) ids[n++] = (uint32_t)v;
+    double cos_max = cos(FEATURE_ANGLE * 3.14159265358979323846 / 180.0);
+    for (size_t e = 0; e < adj.ne; e++) {
+        uint32_t c = adj.edge_start[e + 1] - adj.edge_start[e];
+        unsigned char mark = 0;
+        if (c == 1) {
+            mark = 3; /* boundary and feature */
+        } else if (c >= 3) {
+            mark = 2;
+        } else {
+            double n1[3], n2[3];
+            normal(m, adj.edge_tris[adj.edge_start[e]], n1);
+            normal(m, adj.edge_tris[adj.edge_start[e] + 1], n2);
+            double l = sqrt(n1[0] * n1[0] + n1[1] * n1[1] + n1[2] * n1[2]) *
+                       sqrt(n2[0] * n2[0] + n2[1] * n2[1] + n2[2] * n2[2]);
+            if (l > 0 && (n1[0] * n2[0] + n1[1] * n2[1] + n1[2] * n2[2]) < cos_max * l) mark = 2;
+        }
+        on[adj.edge_v[2 * e]] |= mark;
+        on[adj.edge_v[2 * e + 1]] |= mark;
+    }
+    size_t k = 0, j = 0;
+    for (size_t v = 0; v < m->nv; v++) {
+        if (on[v] & 1) b[k++] = (uint32_t)v;
+        if (on[v] & 2) f[j++] = (uint32_t)v;
+    }
     free(on);
-    free(sides);
-    *out = ids;
-    *count = n;
+    fl_adjacency_free(&adj);
+    *bnd = b;
+    *nb = k;
+    *feat = f;
+    *nf = j;
     return FEMLOD_OK;
 }
 
@@ -137,9 +178,9 @@ femlod_status fl_write_inp(const femlod_mesh *m, FILE *fp, const femlod_write_op
     if ((st = check_sets(ns, nns, m->nv, "node", "vertices", path, err)) != FEMLOD_OK ||
         (st = check_sets(es, nes, m->nt, "element", "triangles", path, err)) != FEMLOD_OK)
         return st;
-    uint32_t *bnd = NULL;
-    size_t nb = 0;
-    if ((st = boundary_nodes(m, &bnd, &nb, err)) != FEMLOD_OK) {
+    uint32_t *bnd = NULL, *feat = NULL;
+    size_t nb = 0, nf = 0;
+    if ((st = edge_nodes(m, &bnd, &nb, &feat, &nf, err)) != FEMLOD_OK) {
         if (err) {
             char msg[FEMLOD_ERROR_MESSAGE_SIZE];
             snprintf(msg, sizeof msg, "%s", err->message);
@@ -163,7 +204,12 @@ femlod_status fl_write_inp(const femlod_mesh *m, FILE *fp, const femlod_write_op
         ok &= fputs("*NSET, NSET=NBOUNDARY\n", fp) >= 0;
         ok &= put_ids(fp, bnd, nb);
     }
+    if (nf) {
+        ok &= fputs("*NSET, NSET=NFEATURE\n", fp) >= 0;
+        ok &= put_ids(fp, feat, nf);
+    }
     free(bnd);
+    free(feat);
     for (size_t i = 0; i < nns && st == FEMLOD_OK; i++)
         st = put_set(fp, "NSET", &ns[i], &ok, path, err);
     for (size_t i = 0; i < nes && st == FEMLOD_OK; i++)

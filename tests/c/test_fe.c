@@ -321,12 +321,15 @@ static void test_inp(void) {
                 "*NODE, NSET=NALL\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0.5\n"
                 "*ELEMENT, TYPE=S3, ELSET=EALL\n1, 1, 2, 3\n2, 1, 3, 4\n"
                 "*NSET, NSET=NBOUNDARY\n1, 2, 3, 4\n"
+                "*NSET, NSET=NFEATURE\n1, 2, 3, 4\n"
                 "*NSET, NSET=Fixed\n1, 2, 4\n"
                 "*NSET, NSET=all4\n1, 2, 3, 4\n"
                 "*ELSET, ELSET=TOP\n2\n",
                 "inp");
     free(t);
-    /* A closed surface has no NBOUNDARY; more than 10 ids wrap. */
+    /* A closed, smooth surface has neither NBOUNDARY nor NFEATURE (an
+     * icosphere's normals differ by less than 40 degrees); more than 10 ids
+     * wrap. */
     femlod_mesh *sphere = shape_icosphere(1);
     uint32_t ids[23];
     for (uint32_t i = 0; i < 23; i++) ids[i] = 22 - i;
@@ -335,11 +338,30 @@ static void test_inp(void) {
     o2.node_sets = &big;
     o2.node_set_count = 1;
     t = write_text(sphere, "s.inp", &o2);
-    CHECK(t && !strstr(t, "NBOUNDARY"));
+    CHECK(t && !strstr(t, "NBOUNDARY") && !strstr(t, "NFEATURE"));
     CHECK_STR_HAS(t, "*NSET, NSET=ring\n1, 2, 3, 4, 5, 6, 7, 8, 9, 10\n"
                      "11, 12, 13, 14, 15, 16, 17, 18, 19, 20\n21, 22, 23\n");
     free(t);
     femlod_mesh_free(sphere);
+    /* A tetrahedron's edges are all sharp (normals 109.5 degrees apart). */
+    femlod_mesh *tet = shape_tetrahedron();
+    t = write_text(tet, "tet.inp", NULL);
+    CHECK(t && !strstr(t, "NBOUNDARY") && strstr(t, "*NSET, NSET=NFEATURE\n1, 2, 3, 4\n"));
+    free(t);
+    femlod_mesh_free(tet);
+    /* An icosphere with one vertex pulled out to a spike: the edges around
+     * it turn sharp, so NFEATURE is that vertex and its ring of 5 or 6
+     * neighbours, nothing else. */
+    femlod_mesh *spike = shape_icosphere(1);
+    for (int k = 0; k < 3; k++) spike->pos[k] *= 3;
+    t = write_text(spike, "spike.inp", NULL);
+    const char *f = t ? strstr(t, "*NSET, NSET=NFEATURE\n") : NULL;
+    size_t members = 0;
+    for (const char *c = f ? f + 21 : NULL; c && *c && *c != '*'; c++) members += *c == ',' || *c == '\n';
+    CHECK(f && strncmp(f + 21, "1, ", 3) == 0);
+    CHECK(members >= 6 && members <= 7);
+    free(t);
+    femlod_mesh_free(spike);
 
     /* Every way to get a set wrong: EINPUT, nothing written. */
     static const struct {
@@ -350,7 +372,7 @@ static void test_inp(void) {
         {"9lives", 0, "bad.inp: node set name '9lives' is not valid (a letter, then letters"},
         {"has space", 0, "node set name 'has space' is not valid"},
         {"", 0, "bad.inp: node set 1 has no name"},
-        {"nall", 0, "bad.inp: node set name 'nall' is reserved (NALL, EALL, NBOUNDARY)"},
+        {"nall", 0, "bad.inp: node set name 'nall' is reserved (NALL, EALL, NBOUNDARY, NFEATURE)"},
         {"NBoundary", 0, "node set name 'NBoundary' is reserved"},
         {"fixed", 4, "bad.inp: node set 'fixed': index 4 out of range (4 vertices)"},
         {"FIXED2", 0, "bad.inp: node set 'fixed2' given twice (names ignore case)"},

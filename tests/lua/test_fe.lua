@@ -55,7 +55,7 @@ T.eq(T.readfile(inp),
   "** " .. femlod._VERSION .. ": 4 nodes, 2 S3 elements\n" ..
   "*NODE, NSET=NALL\n1, 0, 0, 0\n2, 1, 0, 0\n3, 1, 1, 0\n4, 0, 1, 0\n" ..
   "*ELEMENT, TYPE=S3, ELSET=EALL\n1, 1, 2, 3\n2, 1, 3, 4\n" ..
-  "*NSET, NSET=NBOUNDARY\n1, 2, 3, 4\n" ..
+  "*NSET, NSET=NBOUNDARY\n1, 2, 3, 4\n*NSET, NSET=NFEATURE\n1, 2, 3, 4\n" ..
   "*NSET, NSET=Corner\n1, 3\n*NSET, NSET=left\n1, 4\n" ..
   "*ELSET, ELSET=first\n1\n*ELSET, ELSET=upper\n2\n",
   "the .inp file with sets sorted by name")
@@ -73,7 +73,7 @@ T.errmsg("code:1: bad argument #2 to 'save' (nsets: set names must be strings, g
   "plane:save(p, { nsets = { { 1 } } })", env)
 T.errmsg("code:1: bad argument #2 to 'save' (nsets: s: list of indices or function expected, got string)",
   "plane:save(p, { nsets = { s = 'x' } })", env)
-T.errmsg("code:1: " .. inp .. ": node set name 'NALL' is reserved (NALL, EALL, NBOUNDARY)",
+T.errmsg("code:1: " .. inp .. ": node set name 'NALL' is reserved (NALL, EALL, NBOUNDARY, NFEATURE)",
   "plane:save(p, { nsets = { NALL = { 1 } } })", env)
 T.errmsg("code:1: " .. inp .. ": node set 'nothing' is empty",
   "plane:save(p, { nsets = { nothing = function() return false end } })", env)
