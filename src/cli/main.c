@@ -78,6 +78,8 @@ static void usage_text(FILE *f) {
           "                   --emit-jobs (print one command per point instead)\n"
           "                   --point N (run point N only)  --collect (write the\n"
           "                   manifest from the points already run)\n"
+          "                   points run --sandbox, writing only in their folder:\n"
+          "                   --allow DIR (also read/write DIR)  --no-sandbox\n"
           "  report MESH [--reference ORIGINAL] [--html OUT.html] [--no-viewer]\n"
           "                   print the quality report and Table 1 rows (and the\n"
           "                   deviation from ORIGINAL); write an HTML page with\n"

@@ -393,6 +393,9 @@ typedef struct sweep {
     size_t naxes;
     size_t npoints;
     int jobs, emit, collect;
+    int sandbox;           /* points run with --sandbox (default; --no-sandbox: off) */
+    const char **allow;    /* --allow DIR, passed to the points */
+    size_t nallow;
     long point;            /* --point N, or -1 */
     int width;             /* digits of NNN */
     char exe[PATH_MAX];
@@ -405,6 +408,7 @@ static void sweep_free(sweep *s) {
     }
     free(s->axes);
     free(s->fixed);
+    free(s->allow);
 }
 
 /* Names become CSV columns and Lua table keys: identifiers. */
@@ -498,12 +502,14 @@ static int parse_sweep(sweep *s) {
     s->out = "sweep";
     s->jobs = 2;
     s->point = -1;
+    s->sandbox = 1;
     if (s->recipe[0] == '-' && s->recipe[1] == '-')
         return fl_cli_usage_error("sweep: RECIPE.lua comes first, then pairs and options");
     if (strcmp(s->recipe, "-") == 0)
         return fl_cli_usage_error("sweep: the recipe must be a file (each point reads it again)");
     s->fixed = calloc((size_t)c->argc, sizeof *s->fixed);
-    if (!s->fixed) return fl_cli_usage_error("out of memory");
+    s->allow = calloc((size_t)c->argc, sizeof *s->allow);
+    if (!s->fixed || !s->allow) return fl_cli_usage_error("out of memory");
     for (int i = c->operand + 1; i < c->argc; i++) {
         const char *a = c->argv[i];
         if (strncmp(a, "--", 2) == 0) {
@@ -525,6 +531,12 @@ static int parse_sweep(sweep *s) {
                 if (!(v = option_value(s, &i, "--point"))) return fl_cli_usage_error("--point needs a value");
                 st = parse_count("--point", v, 0, MAX_POINTS - 1, &n);
                 s->point = n;
+            } else if (is_option(a, "--allow")) {
+                if (!(v = option_value(s, &i, "--allow"))) return fl_cli_usage_error("--allow needs a value");
+                if (!*v) return fl_cli_usage_error("--allow: folder name expected, got ''");
+                s->allow[s->nallow++] = v;
+            } else if (strcmp(a, "--no-sandbox") == 0) {
+                s->sandbox = 0;
             } else if (strcmp(a, "--emit-jobs") == 0) {
                 s->emit = 1;
             } else if (strcmp(a, "--collect") == 0) {
@@ -600,9 +612,9 @@ static double seconds_since(const struct timespec *t0) {
 
 /* The worker's command line; the strings are malloc'd into *strings. */
 static char **worker_argv(const sweep *s, size_t p, char ***strings, size_t *nstrings) {
-    size_t cap = 12 + s->nfixed + s->naxes;
+    size_t cap = 14 + s->nfixed + s->naxes + 2 * s->nallow;
     char **argv = calloc(cap, sizeof *argv);
-    char **own = calloc(s->naxes + 4, sizeof *own);
+    char **own = calloc(s->naxes + 5, sizeof *own);
     if (!argv || !own) {
         free(argv);
         free(own);
@@ -618,6 +630,18 @@ static char **worker_argv(const sweep *s, size_t p, char ***strings, size_t *nst
     point_path(s, p, "record.json", buf, sizeof buf);
     argv[n++] = own[k++] = strdup(buf);
     argv[n++] = (char *)(uintptr_t)"run";
+    /* Points run sandboxed (issue 8): they write only in their own folder
+     * and the --allow folders, read also the recipe's folder. */
+    if (s->sandbox) {
+        argv[n++] = (char *)(uintptr_t)"--sandbox";
+        argv[n++] = (char *)(uintptr_t)"--allow";
+        point_path(s, p, NULL, buf, sizeof buf);
+        argv[n++] = own[k++] = strdup(buf);
+        for (size_t i = 0; i < s->nallow; i++) {
+            argv[n++] = (char *)(uintptr_t)"--allow";
+            argv[n++] = (char *)(uintptr_t)s->allow[i];
+        }
+    }
     argv[n++] = (char *)(uintptr_t)s->recipe;
     for (size_t i = 0; i < s->nfixed; i++) argv[n++] = s->fixed[i];
     for (size_t a = 0; a < s->naxes; a++) {
@@ -1280,6 +1304,11 @@ static int emit_jobs(const sweep *s) {
             if (!t.bad) print_quoted(t.s);
             free(t.s);
         }
+        for (size_t i = 0; i < s->nallow; i++) {
+            fputs(" --allow ", stdout);
+            print_quoted(s->allow[i]);
+        }
+        if (!s->sandbox) fputs(" --no-sandbox", stdout);
         fputs(" --out ", stdout);
         print_quoted(s->out);
         printf(" --point %zu\n", p);

@@ -156,6 +156,33 @@ do
 end
 -- }======
 
+-- {====== points run sandboxed unless --no-sandbox
+do
+  local SB = path("sandboxed.lua")
+  T.writefile(SB, [[
+if params.mode == "exec" then os.execute("true") end
+local m = femlod.load(params.mesh)
+m:save(params.out_dir .. "/copy.off")
+if params.mode == "outside" then m:save(params.out_dir .. "/../escape.off") end
+]])
+  local dir = path("sandboxed")
+  rmrf(dir)
+  local code, out = R.run("sweep", SB, "mesh=" .. P.shared .. "/fandisk.obj", "--grid", "mode=ok,exec,outside",
+    "--out", dir, "--allow", P.shared)
+  T.eq(code, 1, "sandboxed points: two fail")
+  local rows = read_csv(dir .. "/results.csv")
+  T.eq(rows[1].status, "ok", "sandboxed: reads an --allow folder, writes its own folder")
+  T.eq(rows[2].status, "failed", "sandboxed: os.execute refused")
+  T.check(rows[2].error:find("execute"), "sandboxed: the refusal names execute: " .. tostring(rows[2].error))
+  T.eq(rows[3].status, "failed", "sandboxed: writing outside the point's folder refused")
+  T.check(not T.exists(dir .. "/points/escape.off"), "sandboxed: nothing written outside")
+  -- without --allow the shared mesh is out of reach
+  rmrf(dir)
+  code, out = R.run("sweep", SB, "mesh=" .. P.shared .. "/fandisk.obj", "--grid", "mode=ok", "--out", dir)
+  T.eq(code, 1, "sandboxed: a mesh outside the allowed folders cannot be read: " .. out)
+end
+-- }======
+
 -- {====== failed and crashed points: reported, the others go on
 local CRASH = path("crash.lua")
 T.writefile(CRASH, [[
@@ -173,7 +200,7 @@ do
   local dir = path("crash")
   rmrf(dir)
   local code, out, err = R.run("--seed", "7", "sweep", CRASH, "mesh=" .. P.shared .. "/fandisk.obj", "scale=2.5",
-    "--grid", "mode=ok,error,crash,exit", "--out", dir, "--jobs", "4")
+    "--grid", "mode=ok,error,crash,exit", "--out", dir, "--jobs", "4", "--no-sandbox")
   T.eq(code, 1, "a point failed: exit 1")
   T.eq(err, "", "the sweep itself says nothing on stderr")
   T.check(out:find("point 001 mode=error: failed %(exit 1%)"), out)
@@ -214,7 +241,8 @@ fine:save(params.out_dir .. "/fine." .. params.ext)
 ]])
 do
   local mesh = P.data .. "/tetra.off"
-  local args = { "sweep", COPY, "mesh=" .. mesh, "--grid", "levels=0,1,2", "--grid", "ext=off,ply" }
+  local args = { "sweep", COPY, "mesh=" .. mesh, "--grid", "levels=0,1,2", "--grid", "ext=off,ply",
+    "--allow", P.data }
   local direct = path("direct")
   rmrf(direct)
   local a = { table.unpack(args) }
@@ -233,7 +261,7 @@ do
   local lines = {}
   for l in out:gmatch("[^\n]+") do lines[#lines + 1] = l end
   T.eq(#lines, 6, "one command per point")
-  T.check(lines[4]:find("^cd '?/.* && '?/[^ ]*femlod'? %-%-seed=0 sweep .* %-%-grid levels=0,1,2 %-%-grid ext=off,ply %-%-out .* %-%-point 3$"),
+  T.check(lines[4]:find("^cd '?/.* && '?/[^ ]*femlod'? %-%-seed=0 sweep .* %-%-grid levels=0,1,2 %-%-grid ext=off,ply %-%-allow .* %-%-out .* %-%-point 3$"),
     "self-contained command: " .. lines[4])
   T.check(not T.exists(jobs .. "/manifest.json"), "--emit-jobs runs nothing")
   -- As a scheduler would: each line alone, in any order.
@@ -281,7 +309,7 @@ do
   local dir = path("tty")
   rmrf(dir)
   local line = table.concat({ quote(FEMLOD), "sweep", quote(COPY), quote("mesh=" .. P.data .. "/tetra.off"),
-    "ext=off", "--grid", "levels=0,1", "--out", quote(dir) }, " ")
+    "ext=off", "--grid", "levels=0,1", "--allow", quote(P.data), "--out", quote(dir) }, " ")
   local code, out = sh("script -qec " .. quote(line) .. " /dev/null")
   T.eq(code, 0, "sweep under a terminal")
   T.check(out:find("\r\27%[Ksweep %[[#.]+%] 0/2 points  [%d.]+ s  0%.00 points/s  ETA %?"), "bar before a point ends")
