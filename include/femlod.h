@@ -356,6 +356,12 @@ typedef struct femlod_write_options {
  * FEMLOD_EINPUT) and the quality figures in asset.extras.quality. */
 femlod_status femlod_mesh_write(const femlod_mesh *mesh, const char *path,
                                 const femlod_write_options *options, femlod_error *err);
+/* The same into memory: *data (malloc'd, free with free()) gets *size bytes
+ * of the file femlod_mesh_write would write to a file called name (the
+ * format from options or name's extension, as there). */
+femlod_status femlod_mesh_write_memory(const femlod_mesh *mesh, const char *name,
+                                       const femlod_write_options *options, char **data,
+                                       size_t *size, femlod_error *err);
 
 /* }==================================================================== */
 

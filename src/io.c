@@ -181,61 +181,99 @@ femlod_status femlod_mesh_read_memory(femlod_mesh **out, const void *data, size_
 
 /* {====== writing */
 
-femlod_status femlod_mesh_write(const femlod_mesh *mesh, const char *path,
-                                const femlod_write_options *options, femlod_error *err) {
-    assert(mesh && path);
-    femlod_format f = resolve_format(options ? options->format : FEMLOD_FORMAT_AUTO, path, err);
-    if (f == FEMLOD_FORMAT_AUTO) return err ? err->status : FEMLOD_EINPUT;
+/* Writes the mesh in format f to fp; name is for messages (and tells GLB
+ * from glTF JSON by its extension). */
+static femlod_status write_to(FILE *fp, const femlod_mesh *mesh, const char *name, femlod_format f,
+                              const femlod_write_options *options, femlod_error *err) {
     int gltf = f == FEMLOD_FORMAT_GLTF || f == FEMLOD_FORMAT_GLB;
     int fe = f == FEMLOD_FORMAT_MSH || f == FEMLOD_FORMAT_MSH2 || f == FEMLOD_FORMAT_VTK ||
              f == FEMLOD_FORMAT_INP || f == FEMLOD_FORMAT_MEDIT;
-    if (options && !gltf && (options->color_by || options->normals || options->extras))
-        return fl_error(err, FEMLOD_EINPUT,
-                        "%s: color_by, normals and extras are glTF options (format %s)", path,
-                        femlod_format_name(f));
-    if (options && f != FEMLOD_FORMAT_INP &&
-        (options->node_set_count || options->element_set_count))
-        return fl_error(err, FEMLOD_EINPUT,
-                        "%s: node and element sets are written to .inp only (format %s)", path,
-                        femlod_format_name(f));
-    fl_out o;
-    femlod_status s = fl_out_open(&o, path, err);
-    if (s != FEMLOD_OK) return s;
+    femlod_status s;
     errno = 0;
     if (gltf || fe) {
         /* "gltf" names the family, as "stl" does: GLB for a .glb name. */
-        int binary = f == FEMLOD_FORMAT_GLB || femlod_format_from_path(path) == FEMLOD_FORMAT_GLB;
+        int binary = f == FEMLOD_FORMAT_GLB || femlod_format_from_path(name) == FEMLOD_FORMAT_GLB;
         switch (f) {
-        case FEMLOD_FORMAT_MSH: s = fl_write_msh(mesh, o.fp, 4, path, err); break;
-        case FEMLOD_FORMAT_MSH2: s = fl_write_msh(mesh, o.fp, 2, path, err); break;
-        case FEMLOD_FORMAT_VTK: s = fl_write_vtk(mesh, o.fp, path, err); break;
-        case FEMLOD_FORMAT_INP: s = fl_write_inp(mesh, o.fp, options, path, err); break;
-        case FEMLOD_FORMAT_MEDIT: s = fl_write_medit(mesh, o.fp, path, err); break;
-        default: s = fl_write_gltf(mesh, o.fp, binary, options, path, err); break;
+        case FEMLOD_FORMAT_MSH: return fl_write_msh(mesh, fp, 4, name, err);
+        case FEMLOD_FORMAT_MSH2: return fl_write_msh(mesh, fp, 2, name, err);
+        case FEMLOD_FORMAT_VTK: return fl_write_vtk(mesh, fp, name, err);
+        case FEMLOD_FORMAT_INP: return fl_write_inp(mesh, fp, options, name, err);
+        case FEMLOD_FORMAT_MEDIT: return fl_write_medit(mesh, fp, name, err);
+        default: return fl_write_gltf(mesh, fp, binary, options, name, err);
         }
-        if (s != FEMLOD_OK) {
-            fl_out_abort(&o);
-            return s;
-        }
-        return fl_out_commit(&o, err);
     }
     switch (f) {
-    case FEMLOD_FORMAT_OBJ: s = fl_write_obj(mesh, o.fp); break;
+    case FEMLOD_FORMAT_OBJ: s = fl_write_obj(mesh, fp); break;
     case FEMLOD_FORMAT_STL:
-    case FEMLOD_FORMAT_STL_BINARY: s = fl_write_stl(mesh, o.fp, 1); break;
-    case FEMLOD_FORMAT_STL_ASCII: s = fl_write_stl(mesh, o.fp, 0); break;
-    case FEMLOD_FORMAT_OFF: s = fl_write_off(mesh, o.fp); break;
+    case FEMLOD_FORMAT_STL_BINARY: s = fl_write_stl(mesh, fp, 1); break;
+    case FEMLOD_FORMAT_STL_ASCII: s = fl_write_stl(mesh, fp, 0); break;
+    case FEMLOD_FORMAT_OFF: s = fl_write_off(mesh, fp); break;
     case FEMLOD_FORMAT_PLY:
-    case FEMLOD_FORMAT_PLY_BINARY: s = fl_write_ply(mesh, o.fp, 1); break;
-    case FEMLOD_FORMAT_PLY_ASCII: s = fl_write_ply(mesh, o.fp, 0); break;
-    default: /* written above */ s = FEMLOD_EINPUT; break;
+    case FEMLOD_FORMAT_PLY_BINARY: s = fl_write_ply(mesh, fp, 1); break;
+    case FEMLOD_FORMAT_PLY_ASCII: s = fl_write_ply(mesh, fp, 0); break;
+    default: s = FEMLOD_EINPUT; break;
     }
     if (s != FEMLOD_OK) {
-        int e = errno; /* fl_out_abort's fclose/unlink may change it */
+        int e = errno;
+        return fl_error(err, s, "%s: cannot write: %s", name, strerror(e ? e : EIO));
+    }
+    return FEMLOD_OK;
+}
+
+/* The checks every write makes before anything is opened; the format. */
+static femlod_format write_format(const char *path, const femlod_write_options *options,
+                                  femlod_error *err) {
+    femlod_format f = resolve_format(options ? options->format : FEMLOD_FORMAT_AUTO, path, err);
+    if (f == FEMLOD_FORMAT_AUTO) return f;
+    int gltf = f == FEMLOD_FORMAT_GLTF || f == FEMLOD_FORMAT_GLB;
+    if (options && !gltf && (options->color_by || options->normals || options->extras)) {
+        fl_error(err, FEMLOD_EINPUT, "%s: color_by, normals and extras are glTF options (format %s)",
+                 path, femlod_format_name(f));
+        return FEMLOD_FORMAT_AUTO;
+    }
+    if (options && f != FEMLOD_FORMAT_INP && (options->node_set_count || options->element_set_count)) {
+        fl_error(err, FEMLOD_EINPUT, "%s: node and element sets are written to .inp only (format %s)",
+                 path, femlod_format_name(f));
+        return FEMLOD_FORMAT_AUTO;
+    }
+    return f;
+}
+
+femlod_status femlod_mesh_write(const femlod_mesh *mesh, const char *path,
+                                const femlod_write_options *options, femlod_error *err) {
+    assert(mesh && path);
+    femlod_format f = write_format(path, options, err);
+    if (f == FEMLOD_FORMAT_AUTO) return err ? err->status : FEMLOD_EINPUT;
+    fl_out o;
+    femlod_status s = fl_out_open(&o, path, err);
+    if (s != FEMLOD_OK) return s;
+    s = write_to(o.fp, mesh, path, f, options, err);
+    if (s != FEMLOD_OK) {
         fl_out_abort(&o);
-        return fl_error(err, s, "%s: cannot write: %s", path, strerror(e ? e : EIO));
+        return s;
     }
     return fl_out_commit(&o, err);
+}
+
+femlod_status femlod_mesh_write_memory(const femlod_mesh *mesh, const char *name,
+                                       const femlod_write_options *options, char **data,
+                                       size_t *size, femlod_error *err) {
+    assert(mesh && name && data && size);
+    femlod_format f = write_format(name, options, err);
+    if (f == FEMLOD_FORMAT_AUTO) return err ? err->status : FEMLOD_EINPUT;
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *fp = open_memstream(&buf, &len);
+    if (!fp) return fl_error(err, FEMLOD_ENOMEM, "%s: out of memory", name);
+    femlod_status s = write_to(fp, mesh, name, f, options, err);
+    if (fclose(fp) != 0 && s == FEMLOD_OK) s = fl_error(err, FEMLOD_ENOMEM, "%s: out of memory", name);
+    if (s != FEMLOD_OK) {
+        free(buf);
+        return s;
+    }
+    *data = buf;
+    *size = len;
+    return FEMLOD_OK;
 }
 
 /* }====== */

@@ -22,8 +22,7 @@ local mtype = math.type
 -- A host may have removed io, os or package (a sandbox): the text
 -- functions work without them, the pages say what is missing.
 local io_, os_, package_ = io or {}, os or {}, package or {}
-local io_open, os_remove, os_rename = io_.open, os_.remove, os_.rename
-local os_getenv, os_tmpname = os_.getenv, os_.tmpname
+local io_open, os_getenv = io_.open, os_.getenv
 local loaded = package_.loaded or {}
 local require = require
 
@@ -367,38 +366,26 @@ local function page_head(title)
     "<style>" .. CSS .. "</style>", "</head>", "<body>" }, "\n")
 end
 
--- Writes text to path atomically: a temporary file beside it, renamed over
--- it; on any failure the temporary is removed and the error raised (level).
-local function need_files(level)
-  if not (io_open and os_remove and os_rename and os_tmpname) then
-    error("HTML pages need the io and os libraries (io.open, os.remove, os.rename, os.tmpname)", level)
-  end
-end
-
+-- Writes text to path atomically through femlod.write_file (a temporary
+-- file beside it, renamed over it; the sandbox's folders apply), raising the
+-- error at level. femlod.write_file logs the file for a sweep's record.
 local function write_atomic(path, text, level)
-  need_files(level + 1)
-  local tmpname = os_tmpname()
-  os_remove(tmpname)
-  local tmp = path .. "." .. (tmpname:match("[^/]*$") or "tmp") .. ".part"
-  local f, err = io_open(tmp, "wb")
-  if not f then error(format("%s: cannot write: %s", path, err), level) end
-  local ok, werr = f:write(text)
-  local cok, cerr = f:close()
-  if not ok or not cok then
-    os_remove(tmp)
-    error(format("%s: cannot write: %s", path, werr or cerr), level)
+  local femlod = loaded["femlod"]
+  if not femlod and require then
+    local ok, m = pcall(require, "femlod")
+    femlod = ok and m or nil
   end
-  local rok, rerr = os_rename(tmp, path)
-  if not rok then
-    os_remove(tmp)
-    error(format("%s: cannot write: %s", path, rerr), level)
+  if not (type(femlod) == "table" and femlod.write_file) then
+    error("HTML pages need the femlod module", level)
   end
-  local sweep = loaded["femlod.sweep"]
-  if sweep and sweep.log then sweep.log("write", path) end
+  local ok, err = pcall(femlod.write_file, path, text)
+  if not ok then error(err, level) end
 end
 
 local function read_all(path)
-  local f = io_open(path, "rb")
+  if not io_open then return nil end
+  local ok, f = pcall(io_open, path, "rb")
+  if not ok then return nil end
   if not f then return nil end
   local data = f:read("a")
   f:close()
@@ -420,12 +407,16 @@ local function find_viewer(opt)
   local ok, femlod = false, nil
   if require then ok, femlod = pcall(require, "femlod") end
   if ok and type(femlod) == "table" and type(femlod._VIEWER_PATHS) == "table" then
-    for _, p in ipairs(femlod._VIEWER_PATHS) do list[#list + 1] = p end
+    for _, p in ipairs(femlod._VIEWER_PATHS) do tried[#tried + 1] = p end
   end
   for _, p in ipairs(list) do
     local js = read_all(p)
     if js then return js, p end
     tried[#tried + 1] = p
+  end
+  if ok and type(femlod) == "table" and femlod._viewer_js then
+    local js, p = femlod._viewer_js()
+    if js then return js, p end
   end
   error("the 3D viewer model-viewer.min.js was not found (looked in: " .. concat(tried, ", ")
     .. "); set FEMLOD_MODEL_VIEWER or the viewer option to its path, or viewer = false", 3)
@@ -577,7 +568,6 @@ function M.report(mesh, opts)
   }
   if not opts.html then return summary end
 
-  need_files(3)
   local js
   if opts.viewer ~= false then js = find_viewer(opts.viewer) end
   local title = opts.title or ("femlod report: " .. name)
@@ -596,13 +586,8 @@ function M.report(mesh, opts)
   parts[#parts + 1] = bar_chart("valence-histogram", "Valence distribution (vertices)", vbars, "valence")
   parts[#parts + 1] = "</div>"
   if js then
-    local tmp = os_tmpname()
-    local ok, err = pcall(mesh.save, mesh, tmp, { format = "glb", color_by = "stretch" })
-    local glb = ok and read_all(tmp)
-    os_remove(tmp)
-    local sweep = loaded["femlod.sweep"]
-    if sweep and sweep.forget then sweep.forget(tmp) end
-    if not glb then error(format("%s: cannot make the GLB: %s", opts.html, tostring(err)), 2) end
+    local ok, glb = pcall(mesh.encode, mesh, name .. ".glb", { color_by = "stretch" })
+    if not ok then error(format("%s: cannot make the GLB: %s", opts.html, tostring(glb)), 2) end
     parts[#parts + 1] = "<h2>Stretch on the mesh</h2>"
     parts[#parts + 1] = '<model-viewer id="viewer" alt="' .. esc(name) .. ' coloured by stretch" '
       .. 'camera-controls interaction-prompt="none" shadow-intensity="0" exposure="1" '

@@ -12,6 +12,11 @@
  */
 #include "lfemlod.h"
 
+#include "core.h" /* fl_out: the atomic writer */
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -130,6 +135,64 @@ void fl_lua_io_hook(lua_State *L, const char *kind, int path, int object) {
     lua_call(L, 3, 0);
 }
 
+/* Where femlod.report looks for the 3D viewer of its HTML pages. */
+static const char *const viewer_paths[] = {
+#ifdef FEMLOD_VIEWER_BUILD
+    FEMLOD_VIEWER_BUILD,
+#endif
+#ifdef FEMLOD_VIEWER_INSTALL
+    FEMLOD_VIEWER_INSTALL,
+#endif
+    NULL};
+
+static int push_text(lua_State *L) {
+    lua_pushlstring(L, (const char *)lua_touserdata(L, 1), (size_t)lua_tointeger(L, 2));
+    return 1;
+}
+
+/* femlod._viewer_js(): the text and path of femlod's own copy of the 3D
+ * viewer script (the first of _VIEWER_PATHS that reads), or nothing. Read
+ * here and not through io.open: it is femlod's installed file, not one the
+ * recipe names, so a sandboxed recipe's report still gets its viewer. */
+static int lib_viewer_js(lua_State *L) {
+    for (int i = 0; viewer_paths[i]; i++) {
+        char *data = NULL;
+        size_t size = 0;
+        femlod_error err;
+        if (fl_file_read_all(viewer_paths[i], &data, &size, &err) != FEMLOD_OK) continue;
+        lua_pushcfunction(L, push_text);
+        lua_pushlightuserdata(L, data);
+        lua_pushinteger(L, (lua_Integer)size);
+        int st = lua_pcall(L, 2, 1, 0);
+        free(data);
+        if (st != LUA_OK) return lua_error(L);
+        lua_pushstring(L, viewer_paths[i]);
+        return 2;
+    }
+    return 0;
+}
+
+/* femlod.write_file(path, data): writes the string data to path as every
+ * femlod writer does (a temporary file beside it, renamed over it once
+ * complete; a failure leaves path as it was), within the sandbox's folders
+ * (the same path check as m:save). For recipes' own reports and tables. */
+static int lib_write_file(lua_State *L) {
+    const char *path = fl_lua_check_path(L, 1, 1);
+    size_t len;
+    const char *data = luaL_checklstring(L, 2, &len);
+    femlod_error err;
+    fl_out o;
+    if (fl_out_open(&o, path, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    if (len && fwrite(data, 1, len, o.fp) != len) {
+        int e = errno;
+        fl_out_abort(&o);
+        return luaL_error(L, "%s: cannot write: %s", path, strerror(e ? e : EIO));
+    }
+    if (fl_out_commit(&o, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    fl_lua_io_hook(L, "write", 1, 2);
+    return 0;
+}
+
 /* femlod._isatty(fd): whether file descriptor fd (1 standard output, 2
  * standard error) is a terminal; femlod.progress draws its bar only then. */
 static int lib_isatty(lua_State *L) {
@@ -213,15 +276,6 @@ int luaopen_femlod(lua_State *L) {
     fl_lhierarchy_open(L);
     lua_pushliteral(L, "femlod " FEMLOD_VERSION_STRING);
     lua_setfield(L, -2, "_VERSION");
-    /* Where femlod.report looks for the 3D viewer of its HTML pages. */
-    static const char *const viewer_paths[] = {
-#ifdef FEMLOD_VIEWER_BUILD
-        FEMLOD_VIEWER_BUILD,
-#endif
-#ifdef FEMLOD_VIEWER_INSTALL
-        FEMLOD_VIEWER_INSTALL,
-#endif
-        NULL};
     lua_newtable(L);
     for (int i = 0; viewer_paths[i]; i++) {
         lua_pushstring(L, viewer_paths[i]);
@@ -230,6 +284,10 @@ int luaopen_femlod(lua_State *L) {
     lua_setfield(L, -2, "_VIEWER_PATHS");
     lua_pushcfunction(L, lib_isatty);
     lua_setfield(L, -2, "_isatty");
+    lua_pushcfunction(L, lib_write_file);
+    lua_setfield(L, -2, "write_file");
+    lua_pushcfunction(L, lib_viewer_js);
+    lua_setfield(L, -2, "_viewer_js");
     /* femlod.report(mesh, opts): the helper's report function. */
     const fl_lua_chunk *c = find_chunk("femlod.report");
     if (c) {

@@ -20,6 +20,7 @@
 #include <math.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 femlod_mesh **fl_lmesh_box(lua_State *L) {
@@ -412,19 +413,56 @@ static femlod_index_set *read_sets(lua_State *L, const fl_opts *o, const char *k
     return sets;
 }
 
+/* m:save(path, opts) and m:encode(name, opts): the options of both. */
+static void write_options(lua_State *L, femlod_write_options *opts) {
+    fl_opts o;
+    fl_opts_open(&o, L, 3, save_keys);
+    int f = fl_opts_enum(&o, "format", format_names, -1);
+    opts->format = f < 0 ? FEMLOD_FORMAT_AUTO : femlod_format_from_name(format_names[f]);
+    opts->color_by = (femlod_color_by)fl_opts_enum(&o, "color_by", color_names, 0);
+    opts->normals = fl_opts_boolean(&o, "normals", 0);
+    if (fl_opts_push(&o, "extras") != LUA_TNIL) opts->extras = extras_json(L, &o);
+    opts->node_sets = read_sets(L, &o, "nsets", 0, &opts->node_set_count);
+    opts->element_sets = read_sets(L, &o, "elsets", 1, &opts->element_set_count);
+}
+
+static int push_bytes(lua_State *L) {
+    lua_pushlstring(L, (const char *)lua_touserdata(L, 1), (size_t)lua_tointeger(L, 2));
+    return 1;
+}
+
+/* m:encode(name [, opts]): the bytes m:save(name, opts) would write, as a
+ * string, with no file made (name gives the format by its extension, as for
+ * save, and names the mesh in messages). For pages and messages that embed
+ * a mesh, and for recipes under --sandbox. */
+static int mesh_encode(lua_State *L) {
+    fl_lmesh_check(L, 1);
+    size_t len;
+    const char *name = luaL_checklstring(L, 2, &len);
+    luaL_argcheck(L, strlen(name) == len, 2, "name contains a zero byte");
+    femlod_write_options opts = FEMLOD_WRITE_OPTIONS_INIT;
+    write_options(L, &opts);
+    const femlod_mesh *m = fl_lmesh_check(L, 1); /* a set function may have closed it */
+    femlod_error err;
+    char *data = NULL;
+    size_t size = 0;
+    if (femlod_mesh_write_memory(m, name, &opts, &data, &size, &err) != FEMLOD_OK)
+        return fl_lua_raise(L, &err);
+    /* lua_pushlstring may raise (memory): protected, so that data is freed */
+    lua_pushcfunction(L, push_bytes);
+    lua_pushlightuserdata(L, data);
+    lua_pushinteger(L, (lua_Integer)size);
+    int st = lua_pcall(L, 2, 1, 0);
+    free(data);
+    if (st != LUA_OK) return lua_error(L);
+    return 1;
+}
+
 static int mesh_save(lua_State *L) {
     const femlod_mesh *m = fl_lmesh_check(L, 1);
     const char *path = fl_lua_check_path(L, 2, 1);
     femlod_write_options opts = FEMLOD_WRITE_OPTIONS_INIT;
-    fl_opts o;
-    fl_opts_open(&o, L, 3, save_keys);
-    int f = fl_opts_enum(&o, "format", format_names, -1);
-    opts.format = f < 0 ? FEMLOD_FORMAT_AUTO : femlod_format_from_name(format_names[f]);
-    opts.color_by = (femlod_color_by)fl_opts_enum(&o, "color_by", color_names, 0);
-    opts.normals = fl_opts_boolean(&o, "normals", 0);
-    if (fl_opts_push(&o, "extras") != LUA_TNIL) opts.extras = extras_json(L, &o);
-    opts.node_sets = read_sets(L, &o, "nsets", 0, &opts.node_set_count);
-    opts.element_sets = read_sets(L, &o, "elsets", 1, &opts.element_set_count);
+    write_options(L, &opts);
     m = fl_lmesh_check(L, 1); /* a set function may have closed it */
     femlod_error err;
     if (femlod_mesh_write(m, path, &opts, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
@@ -740,6 +778,7 @@ static const luaL_Reg mesh_methods[] = {
     {"bbox", mesh_bbox},
     {"subdivide", mesh_subdivide},
     {"repair", mesh_repair},
+    {"encode", mesh_encode},
     {"copy", mesh_copy},
     {"positions", mesh_positions},
     {"triangles", mesh_triangles},

@@ -133,7 +133,8 @@ do
     femlod.report(mesh, { html = page, viewer = "/nonexistent/mv.js" })
   end)
   T.eq(T.readfile(page), before, "failed report: the old page is kept")
-  T.checkerr("cannot write", femlod.report, mesh, { html = P.tmp .. "/no/such/dir/x.html", viewer = false })
+  T.checkerr("x%.html: cannot create temporary file: No such file or directory", femlod.report, mesh,
+    { html = P.tmp .. "/no/such/dir/x.html", viewer = false })
   T.checkerr("test_report%.lua:%d+: " .. (P.tmp:gsub("%p", "%%%0")) .. ": cannot write: Is a directory",
     function() femlod.report(mesh, { html = P.tmp, viewer = false }) end)
   T.eq(leftovers(P.tmp, "tmp."), 0, "no temporary left in the folder")

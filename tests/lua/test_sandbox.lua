@@ -148,6 +148,9 @@ refused("io.open('recipes/new.txt', 'w')", no_write("recipes/new.txt"))
 refused("io.open('recipes/notes.txt', 'a')", no_write("recipes/notes.txt"))
 refused("io.open('recipes/notes.txt', 'r+')", no_write("recipes/notes.txt"))
 refused("io.output('outside/new.txt')", no_write("outside/new.txt"))
+refused("femlod.write_file('outside/new.txt', 'x')", no_write("outside/new.txt"))
+refused("femlod.report(femlod.mesh{ positions = {{0,0,0},{1,0,0},{0,1,0}}, triangles = {{1,2,3}} }, "
+  .. "{ html = 'outside/r.html', viewer = false })", no_write("outside/r.html"))
 refused("io.open('allowed2/new.txt', 'w')", no_write("allowed2/new.txt"), "a sibling named like the root")
 refused("io.open('allowed/outdir/new.txt', 'w')", no_write("allowed/outdir/new.txt"))
 refused("io.open('allowed/dangling.txt', 'w')",
@@ -344,6 +347,28 @@ usage("femlod: --max-time: number of seconds > 0 expected, got '-1'", "run", "--
 usage("femlod: --max-time: number of seconds > 0 expected, got 'soon'", "--max-time", "soon", "-e", "")
 usage("femlod: --sandbox applies to run and -e only", "--sandbox", "info", "recipes/part.obj")
 usage("femlod: unknown option '--sandbx'", "run", "--sandbx", "x.lua")
+-- }======
+
+-- {====== femlod's own writers work inside: write_file, a report page with its viewer
+do
+  local name = recipe([[
+femlod.write_file("allowed/table.csv", "a,b\n1,2\n")
+local m = femlod.mesh { positions = { {0,0,0}, {1,0,0}, {0,1,0}, {0,0,1} },
+  triangles = { {1,3,2}, {1,2,4}, {1,4,3}, {2,3,4} } }
+assert(#m:encode("m.glb") > 0)
+femlod.report(m, { html = "allowed/page.html" })
+print("done")
+]])
+  local st, out, err = sandboxed(name)
+  T.eq(st, 0, "sandboxed report: exit 0: " .. err)
+  T.eq(out, "done\n", "sandboxed report: ran to the end")
+  T.eq(T.readfile(at("allowed/table.csv")), "a,b\n1,2\n", "write_file in an --allow folder")
+  local page = T.readfile(at("allowed/page.html")) or ""
+  T.check(page:find("<model%-viewer") and page:find("data:model/gltf%-binary;base64,"),
+    "sandboxed report: the page has the viewer and the mesh")
+  os.remove(at("allowed/table.csv"))
+  os.remove(at("allowed/page.html"))
+end
 -- }======
 
 T.summary("test_sandbox")
