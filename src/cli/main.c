@@ -27,7 +27,8 @@
 enum { EXIT_OK = 0, EXIT_ERROR = 1, EXIT_USAGE = 2, EXIT_LIMIT = 3 };
 
 typedef enum command {
-    CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY, CMD_LOD, CMD_SWEEP, CMD_REPORT
+    CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY, CMD_LOD, CMD_SWEEP, CMD_REPORT,
+    CMD_REPAIR
 } command;
 
 /* What the command line asked for. Indices point into argv. */
@@ -56,6 +57,9 @@ static void usage_text(FILE *f) {
           "  convert IN OUT   read IN and write OUT (format from the extension)\n"
           "                   format=FMT (of OUT)  input_format=FMT (of IN)\n"
           "                   glTF OUT: color_by=stretch|size|valence  normals=true\n"
+          "  repair IN OUT    repair IN into OUT and print what changed: weld=TOL|false\n"
+          "                   (default 0: equal positions)  drop_degenerate=  drop_duplicates=\n"
+          "                   split_nonmanifold=  orient=  drop_unused=  (true|false)\n"
           "  simplify IN OUT  simplify IN into OUT; print the before/after report\n"
           "                   --target N | --ratio R  (triangles, or output/input)\n"
           "                   --tolerance X  --max-deviation X  --min-stretch X\n"
@@ -266,6 +270,9 @@ static int parse_args(lua_State *L, cli *c) {
     } else if (strcmp(w, "simplify") == 0) {
         c->cmd = CMD_SIMPLIFY;
         need = 2;
+    } else if (strcmp(w, "repair") == 0) {
+        c->cmd = CMD_REPAIR;
+        need = 2;
     } else if (strcmp(w, "lod") == 0) {
         c->cmd = CMD_LOD;
         need = 2;
@@ -289,7 +296,8 @@ static int parse_args(lua_State *L, cli *c) {
                                            "an input and an output file",
                                            "an input and an output file",
                                            "a hierarchy file and an output file",
-                                           "a recipe", "a mesh file"};
+                                           "a recipe", "a mesh file",
+                                           "an input and an output file"};
         return usage_error("missing %s", what[c->cmd]);
     }
     c->pairs = c->operand + (need ? need : 1);
@@ -590,6 +598,83 @@ static int cmd_convert(lua_State *L, const cli *c) {
                (long long)lua_tointeger(L, -2), (long long)lua_tointeger(L, -1),
                f == FEMLOD_FORMAT_AUTO ? "?" : femlod_format_name(f));
     }
+    return EXIT_OK;
+}
+
+/* femlod repair IN OUT [name=value ...]: m:repair with the pairs as its
+ * options (the binding checks them), the result saved, every change
+ * printed. */
+static int cmd_repair(lua_State *L, const cli *c) {
+    static const char *const keys[] = {"weld", "drop_degenerate", "drop_duplicates",
+                                       "split_nonmanifold", "orient", "drop_unused",
+                                       "format", "input_format", NULL};
+    int st = check_pairs(L, c, keys, "weld, drop_degenerate, drop_duplicates, split_nonmanifold, "
+                                     "orient, drop_unused, format, input_format");
+    if (st >= 0) return st;
+    int pairs = lua_gettop(L);
+    const char *format = pair_string(L, pairs, "format");
+    const char *input_format = pair_string(L, pairs, "input_format");
+    if ((st = check_format("format", format)) >= 0) return st;
+    if ((st = check_format("input_format", input_format)) >= 0) return st;
+    const char *in = c->argv[c->operand], *out = c->argv[c->operand + 1];
+    luaL_requiref(L, "femlod", luaopen_femlod, 0);
+    int module = lua_gettop(L);
+    /* the repair options: the pairs without the two formats, checked here
+     * so that a bad value is a usage error */
+    lua_createtable(L, 0, 6);
+    int opts = lua_gettop(L);
+    for (int k = 0; k < 6; k++) {
+        int t = lua_getfield(L, pairs, keys[k]);
+        if (k == 0 && t == LUA_TNUMBER) {
+            double w = (double)lua_tonumber(L, -1);
+            if (!(w >= 0.0) || !(w < HUGE_VAL))
+                return usage_error("weld: a finite length >= 0 or false expected, got %s",
+                                   lua_tostring(L, -1));
+        } else if (t != LUA_TNIL && t != LUA_TBOOLEAN) {
+            return usage_error("%s: %s expected, got '%s'", keys[k],
+                               k == 0 ? "a length or false" : "true or false",
+                               luaL_tolstring(L, -1, NULL));
+        }
+        lua_setfield(L, opts, keys[k]);
+    }
+    fl_cli_load_mesh(L, module, in, input_format);
+    int mesh = lua_gettop(L);
+    lua_pushvalue(L, opts);
+    call_method(L, mesh, "repair", 1, 2);
+    int fixed = lua_gettop(L) - 1, rep = fixed + 1;
+    lua_pushstring(L, out);
+    lua_createtable(L, 0, 1);
+    if (format) {
+        lua_pushstring(L, format);
+        lua_setfield(L, -2, "format");
+    }
+    call_method(L, fixed, "save", 2, 0);
+    if (c->quiet) return EXIT_OK;
+    static const char *const rows[][2] = {
+        {"welded", "vertices welded into an earlier one"},
+        {"degenerate", "degenerate triangles dropped"},
+        {"duplicates", "duplicate triangles dropped"},
+        {"split_vertices", "vertex copies cutting non-manifold vertices"},
+        {"flipped", "triangles turned over"},
+        {"unused", "unused vertices dropped"},
+        {"unorientable_edges", "edges left inconsistent (not orientable)"},
+        {"nonmanifold_edges_left", "non-manifold edges left"},
+    };
+    lua_getfield(L, rep, "triangles_in");
+    lua_getfield(L, rep, "vertices_in");
+    printf("%s: %lld triangles, %lld vertices\n", in, (long long)lua_tointeger(L, -2),
+           (long long)lua_tointeger(L, -1));
+    lua_pop(L, 2);
+    for (size_t r = 0; r < sizeof rows / sizeof rows[0]; r++) {
+        lua_getfield(L, rep, rows[r][0]);
+        printf("  %8lld  %s\n", (long long)lua_tointeger(L, -1), rows[r][1]);
+        lua_pop(L, 1);
+    }
+    lua_getfield(L, rep, "triangles");
+    lua_getfield(L, rep, "vertices");
+    femlod_format f = format ? femlod_format_from_name(format) : femlod_format_from_path(out);
+    printf("%s: %lld triangles, %lld vertices (%s)\n", out, (long long)lua_tointeger(L, -2),
+           (long long)lua_tointeger(L, -1), f == FEMLOD_FORMAT_AUTO ? "?" : femlod_format_name(f));
     return EXIT_OK;
 }
 
@@ -1003,6 +1088,7 @@ static int pmain(lua_State *L) {
         case CMD_CONVERT: st = cmd_convert(L, &c); break;
         case CMD_SIMPLIFY: st = cmd_simplify(L, &c); break;
         case CMD_LOD: st = cmd_lod(L, &c); break;
+        case CMD_REPAIR: st = cmd_repair(L, &c); break;
         case CMD_SWEEP:
         case CMD_REPORT: {
             fl_sweep_cli sc = {c.argc, c.argv, c.operand, c.seed, c.quiet, c.traceback};

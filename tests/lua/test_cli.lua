@@ -335,6 +335,48 @@ do
 end
 -- }======
 
+-- {====== repair
+do
+  local spider, out = P.shared .. "/spider_binary.stl", path("spider_fixed.obj")
+  os.remove(out)
+  local code, text, err = run("repair", spider, out)
+  T.eq(code, 0, "repair exit: " .. err)
+  T.eq(err, "", "repair: nothing on stderr")
+  T.eq(text, spider .. ": 1368 triangles, 722 vertices\n"
+    .. "         0  vertices welded into an earlier one\n"
+    .. "        56  degenerate triangles dropped\n"
+    .. "         0  duplicate triangles dropped\n"
+    .. "         0  vertex copies cutting non-manifold vertices\n"
+    .. "         4  triangles turned over\n"
+    .. "         0  unused vertices dropped\n"
+    .. "         0  edges left inconsistent (not orientable)\n"
+    .. "         0  non-manifold edges left\n"
+    .. out .. ": 1312 triangles, 722 vertices (obj)\n", "repair report")
+  local q = femlod.load(out):quality()
+  T.check(q.manifold and q.oriented and q.degenerate == 0, "repair wrote a manifold, oriented mesh")
+  code, text = run("--quiet", "repair", spider, out, "orient=false", "weld=false")
+  T.eq(code, 0, "repair with options")
+  T.eq(text, "", "--quiet: no report")
+  T.check(not femlod.load(out):quality().oriented, "orient=false: the orientation is left alone")
+  local function usage_err(expected, ...)
+    local c, o, e = run(...)
+    T.eq(c, 2, "usage exit for " .. table.concat({ ... }, " "))
+    T.eq(o, "", "nothing on stdout")
+    T.eq(e:match("^[^\n]*"), "femlod: " .. expected, "usage message")
+  end
+  usage_err("weld: a finite length >= 0 or false expected, got -1", "repair", spider, out, "weld=-1")
+  usage_err("orient: true or false expected, got 'yes'", "repair", spider, out, "orient=yes")
+  usage_err("unknown parameter 'wled' (valid: weld, drop_degenerate, drop_duplicates, split_nonmanifold, "
+    .. "orient, drop_unused, format, input_format)", "repair", spider, out, "wled=1")
+  usage_err("missing an input and an output file", "repair", spider)
+  local before = T.readfile(out)
+  code, text, err = run("repair", P.shared .. "/missing.stl", out)
+  T.eq(code, 1, "repair of a missing file: exit 1")
+  T.check(err:find("missing%.stl: cannot open"), "names the file: " .. err)
+  T.eq(T.readfile(out), before, "the old output is kept")
+end
+-- }======
+
 -- {====== simplify
 do
   local out = path("simplified.obj")
