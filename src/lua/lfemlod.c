@@ -150,6 +150,15 @@ static int push_text(lua_State *L) {
     return 1;
 }
 
+void fl_lua_push_owned(lua_State *L, char *data, size_t size) {
+    lua_pushcfunction(L, push_text); /* protected, so that data is freed either way */
+    lua_pushlightuserdata(L, data);
+    lua_pushinteger(L, (lua_Integer)size);
+    int st = lua_pcall(L, 2, 1, 0);
+    free(data);
+    if (st != LUA_OK) lua_error(L);
+}
+
 /* femlod._viewer_js(): the text and path of femlod's own copy of the 3D
  * viewer script (the first of _VIEWER_PATHS that reads), or nothing. Read
  * here and not through io.open: it is femlod's installed file, not one the
@@ -160,12 +169,7 @@ static int lib_viewer_js(lua_State *L) {
         size_t size = 0;
         femlod_error err;
         if (fl_file_read_all(viewer_paths[i], &data, &size, &err) != FEMLOD_OK) continue;
-        lua_pushcfunction(L, push_text);
-        lua_pushlightuserdata(L, data);
-        lua_pushinteger(L, (lua_Integer)size);
-        int st = lua_pcall(L, 2, 1, 0);
-        free(data);
-        if (st != LUA_OK) return lua_error(L);
+        fl_lua_push_owned(L, data, size);
         lua_pushstring(L, viewer_paths[i]);
         return 2;
     }

@@ -82,6 +82,10 @@ struct fl_lua_guard {
     int memory_capped;
 };
 
+/* Pushes size bytes of data as a Lua string and frees data, also when
+ * making the string fails (the memory error is raised after the free). */
+FL_LUA_INTERNAL void fl_lua_push_owned(lua_State *L, char *data, size_t size);
+
 /* The installed guard, or NULL. */
 FL_LUA_INTERNAL fl_lua_guard *fl_lua_guard_get(lua_State *L);
 /* The path at argument arg, for reading or writing: raises on a non-string,

@@ -426,11 +426,6 @@ static void write_options(lua_State *L, femlod_write_options *opts) {
     opts->element_sets = read_sets(L, &o, "elsets", 1, &opts->element_set_count);
 }
 
-static int push_bytes(lua_State *L) {
-    lua_pushlstring(L, (const char *)lua_touserdata(L, 1), (size_t)lua_tointeger(L, 2));
-    return 1;
-}
-
 /* m:encode(name [, opts]): the bytes m:save(name, opts) would write, as a
  * string, with no file made (name gives the format by its extension, as for
  * save, and names the mesh in messages). For pages and messages that embed
@@ -448,13 +443,7 @@ static int mesh_encode(lua_State *L) {
     size_t size = 0;
     if (femlod_mesh_write_memory(m, name, &opts, &data, &size, &err) != FEMLOD_OK)
         return fl_lua_raise(L, &err);
-    /* lua_pushlstring may raise (memory): protected, so that data is freed */
-    lua_pushcfunction(L, push_bytes);
-    lua_pushlightuserdata(L, data);
-    lua_pushinteger(L, (lua_Integer)size);
-    int st = lua_pcall(L, 2, 1, 0);
-    free(data);
-    if (st != LUA_OK) return lua_error(L);
+    fl_lua_push_owned(L, data, size);
     return 1;
 }
 

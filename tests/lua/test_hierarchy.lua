@@ -826,18 +826,10 @@ do
   T.eq((h:refine_region { sphere = { center = c, radius = r }, size = 0.01 }), 0, "idempotent")
   -- where: the same sphere as a function; coarsen(math.huge) goes back to
   -- the simplification's result, so one simplification serves every case
-  local g = h
-  g:coarsen(math.huge)
-  T.eq(g:counts().triangles, base, "back to the simplification's result")
-  g:refine_region { where = in_sphere, size = 0.01 }
-  local n2, fine2 = 0, true
-  for _, id in ipairs(g:front()) do
-    local node = g:node(id)
-    if in_sphere(node.position[1], node.position[2], node.position[3]) then
-      n2 = n2 + 1
-      if node.children and node.e_size > 0.01 then fine2 = false end
-    end
-  end
+  h:coarsen(math.huge)
+  T.eq(h:counts().triangles, base, "back to the simplification's result")
+  h:refine_region { where = in_sphere, size = 0.01 }
+  local n2, fine2 = inside_nodes(in_sphere)
   T.check(n2 > 0 and fine2, "where: every front node inside is fine")
   -- box, vertices, grading false
   local b = h
