@@ -233,7 +233,7 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
     femlod_hierarchy *h = calloc(1, sizeof *h);
     incidence in = {0};
     uint8_t *dead = NULL;
-    uint32_t *seen = NULL;
+    uint32_t *seen = NULL, *vmark = NULL;
     femlod_status st = FEMLOD_OK;
     if (!h) return fl_error(err, FEMLOD_ENOMEM, "out of memory");
     h->nv = nv;
@@ -298,17 +298,19 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
     in.next = fl_alloc(in.cap, sizeof(uint32_t));
     dead = fl_calloc(nf, 1);
     seen = fl_alloc(nf, sizeof(uint32_t));
+    vmark = fl_alloc(nn, sizeof(uint32_t));
     if (!h->pos || !h->e_size || !h->parent || !h->child || !h->depth || !h->vstar_start ||
         !h->vstars || !h->dep_start || !h->deps || !h->face_v || !h->removed_start ||
         !h->removed || !h->created_start || !h->state || !h->front || !h->front_pos ||
         !h->active || !h->active_pos || !h->stack || !h->work || !h->stamp || !h->index || !in.head ||
-        !in.face || !in.next || !dead || !seen) {
+        !in.face || !in.next || !dead || !seen || !vmark) {
         st = fl_error(err, FEMLOD_ENOMEM, "out of memory building a hierarchy of %zu nodes", nn);
         goto done;
     }
     memset(h->parent, 0xFF, nn * sizeof(uint32_t));
     memset(in.head, 0xFF, nn * sizeof(uint32_t));
     memset(seen, 0xFF, nf * sizeof(uint32_t));
+    memset(vmark, 0xFF, nn * sizeof(uint32_t));
     if (nv) memcpy(h->pos, mesh->pos, nv * 3 * sizeof(double));
 
     /* Leaves: e_size is the mean length of the incident input edges. */
@@ -390,6 +392,34 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
                           c, nrem - h->removed_start[c], col.face_count);
             goto done;
         }
+        /* The vstars must be exactly the pair's neighbours (the corners of
+         * its faces other than i and j): the dependency rule, and with it
+         * every split and collapse, rests on that (a log from a file could
+         * say otherwise). */
+        {
+            size_t nbrs = 0;
+            for (uint32_t r = h->removed_start[c]; r < nrem; r++)
+                for (int s = 0; s < 3; s++) {
+                    uint32_t v = h->face_v[3 * (size_t)h->removed[r] + (size_t)s];
+                    if (v != i && v != j && vmark[v] != (uint32_t)c) {
+                        vmark[v] = (uint32_t)c;
+                        nbrs++;
+                    }
+                }
+            size_t listed = 0;
+            for (size_t s = 0; s < col.vstar_count; s++) {
+                uint32_t v = col.vstars[s];
+                if (vmark[v] != (uint32_t)c) break; /* not a neighbour, or listed twice */
+                vmark[v] = NONE - 1;
+                listed++;
+            }
+            if (listed != col.vstar_count || listed != nbrs) {
+                st = fl_error(err, FEMLOD_EINPUT,
+                              "collapse log: collapse %zu: its vstars are not the pair's %zu "
+                              "neighbours", c, nbrs);
+                goto done;
+            }
+        }
         for (uint32_t r = h->removed_start[c]; r < nrem; r++) {
             uint32_t f = h->removed[r];
             dead[f] = 1;
@@ -442,6 +472,7 @@ done:
     free(in.next);
     free(dead);
     free(seen);
+    free(vmark);
     if (st != FEMLOD_OK) {
         femlod_hierarchy_free(h);
         return st;

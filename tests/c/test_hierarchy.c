@@ -249,6 +249,14 @@ static void test_load_memory(void) {
     }
     CHECK(failed == (n + 6) / 7);
     CHECK(named == failed);
+    /* fuzz_flh's finding: a file (its CRC right) whose collapse lists wrong
+     * vstars loaded, validated, and crashed the first refine; now refused */
+    femlod_hierarchy *bad = NULL;
+    snprintf(path, sizeof path, "%s/bad/flh_vstars.flh", FEMLOD_TEST_DATA);
+    CHECK(femlod_hierarchy_load(&bad, path, NULL, &err) == FEMLOD_EPARSE);
+    CHECK(bad == NULL);
+    CHECK_STR_HAS(err.message, "flh_vstars.flh: collapse log: collapse 22: its vstars are not the "
+                               "pair's 7 neighbours");
 }
 
 static void test_damaged_files(void) {
