@@ -137,8 +137,27 @@ static void interval(const double *const T[3], const double d[3], const double D
     *hi = b;
 }
 
+void fl_tri_plane_of(const double *const T[3], fl_tri_plane *pl) {
+    double e1[3], e2[3];
+    sub3(e1, T[1], T[0]);
+    sub3(e2, T[2], T[0]);
+    cross3(pl->n, e1, e2);
+    pl->len = sqrt(dot3(pl->n, pl->n));
+}
+
 int fl_tri_tri_intersect(const double *const P[3], const uint32_t pid[3], const double *const Q[3],
                          const uint32_t qid[3], double eps) {
+    fl_tri_plane pp;
+    fl_tri_plane_of(P, &pp);
+    return fl_tri_tri_intersect_p(P, pid, &pp, Q, qid, eps);
+}
+
+/* Q's plane is computed only when P's plane does not already separate the
+ * two: most pairs the simplifier tests are neighbours lying on one side of
+ * each other's plane. The answer is that of computing both first (a
+ * degenerate Q gives 0 either way). */
+int fl_tri_tri_intersect_p(const double *const P[3], const uint32_t pid[3], const fl_tri_plane *pp,
+                           const double *const Q[3], const uint32_t qid[3], double eps) {
     int sp[3] = {-1, -1, -1}, shared = 0; /* sp[c]: Q's corner equal to P's corner c */
     for (int c = 0; c < 3; c++)
         for (int e = 0; e < 3; e++)
@@ -148,17 +167,14 @@ int fl_tri_tri_intersect(const double *const P[3], const uint32_t pid[3], const 
             }
     if (shared >= 3) return 1;
 
-    double e1[3], e2[3], np[3], nq[3];
-    sub3(e1, P[1], P[0]);
-    sub3(e2, P[2], P[0]);
-    cross3(np, e1, e2);
-    sub3(e1, Q[1], Q[0]);
-    sub3(e2, Q[2], Q[0]);
-    cross3(nq, e1, e2);
-    double lp = sqrt(dot3(np, np)), lq = sqrt(dot3(nq, nq));
-    if (!(lp > 0.0) || !(lq > 0.0)) return 0; /* degenerate: the quality checks reject those */
+    const double *np = pp->n;
+    double lp = pp->len;
+    if (!(lp > 0.0)) return 0; /* degenerate: the quality checks reject those */
+    fl_tri_plane qp;
 
     if (shared == 2) {
+        fl_tri_plane_of(Q, &qp);
+        if (!(qp.len > 0.0)) return 0;
         /* Neighbours across an edge overlap only when folded flat onto each
          * other: the opposite corners on the same side of the edge and the
          * dihedral angle below about 0.6 degrees. */
@@ -185,6 +201,10 @@ int fl_tri_tri_intersect(const double *const P[3], const uint32_t pid[3], const 
         }
     double dq[3], dp[3];
     if (plane_side(P, np, lp, Q, dq, eps, qmask)) return 0;
+    fl_tri_plane_of(Q, &qp);
+    const double *nq = qp.n;
+    double lq = qp.len;
+    if (!(lq > 0.0)) return 0;
     if (plane_side(Q, nq, lq, P, dp, eps, pmask)) return 0;
 
     if (dq[0] == 0.0 && dq[1] == 0.0 && dq[2] == 0.0) {

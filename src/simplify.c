@@ -176,7 +176,7 @@ typedef struct simp {
     size_t nt, live, nt_in;
     uint32_t *tri, *tedge;
     uint32_t *fin; /* input triangle index of each face slot */
-    float *fn;   /* unit normal (0 for degenerate) */
+    float *fn;   /* unit normal (NaN for degenerate) */
     float *fsz;  /* longest edge */
     double *finv; /* 1 / fsz, for Sz_DIF */
     float *cone; /* axis xyz, half-angle (radians) */
@@ -209,6 +209,8 @@ typedef struct simp {
     size_t npts;    /* points gathered by the last deviation check */
     double *tbox;   /* per ring face: box of the new triangle */
     size_t tbox_cap;
+    fl_tri_plane *tplane; /* per ring face: plane of the new triangle */
+    size_t tplane_cap;
     float *newcone; /* per ring face */
     size_t newcone_cap;
     uint32_t vstars[MAX_VSTARS + 2];
@@ -270,7 +272,9 @@ static void face_update_cache(simp *S, uint32_t f) {
     sub3(e2, c, a);
     cross3(n, e1, e2);
     double l = sqrt(dot3(n, n));
-    for (int k = 0; k < 3; k++) S->fn[3 * (size_t)f + k] = l > 0 ? (float)(n[k] / l) : 0.0f;
+    /* a degenerate face gets a NaN normal: every comparison with it is
+     * false, so tri_eval skips the turn test without a branch of its own */
+    for (int k = 0; k < 3; k++) S->fn[3 * (size_t)f + k] = l > 0 ? (float)(n[k] / l) : __builtin_nanf("");
     double L2 = mx(dot3(e1, e1), mx(dot3(e2, e2), dist2(b, c)));
     S->fsz[f] = (float)sqrt(L2);
     S->finv[f] = 1.0 / (double)S->fsz[f];
@@ -558,11 +562,9 @@ static inline int tri_eval(const simp *S, const ring *R, size_t r, const double 
     if (!(n2 > 0.0)) return FEMLOD_REJECT_STRETCH;
     /* foldover: the normal may not flip nor turn past max_normal_change */
     const float *fo = S->fn + 3 * (size_t)R->face[r];
-    double d = n[0] * fo[0] + n[1] * fo[1] + n[2] * fo[2];
-    if (fo[0] != 0.0f || fo[1] != 0.0f || fo[2] != 0.0f) {
-        if (d <= 0.0) return FEMLOD_REJECT_FOLDOVER;
-        if (S->cos_nc > 0.0 && d * d < S->cos_nc2 * n2) return FEMLOD_REJECT_FOLDOVER;
-    }
+    double d = n[0] * fo[0] + n[1] * fo[1] + n[2] * fo[2]; /* NaN: the old face was degenerate, no test */
+    if (d <= 0.0) return FEMLOD_REJECT_FOLDOVER;
+    if (S->cos_nc > 0.0 && d * d < S->cos_nc2 * n2) return FEMLOD_REJECT_FOLDOVER;
     /* C2: St = sqrt(3) |n| / (s L), compared squared */
     double s = 0.5 * (sqrt(la2) + sqrt(lb2) + R->lab[r]);
     double den = s * s * L2;
@@ -899,15 +901,19 @@ static int deviation_check(simp *S, ring *R, const double p[3], size_t *np) {
  * overlaps, the triangles being replaced excepted, and against the other new
  * triangles. Shared corners and edges are told to the test by vertex id. */
 static int intersect_check(simp *S, ring *R, const double p[3]) {
-    if (!buf_reserve((void **)&S->tbox, &S->tbox_cap, 6 * R->n + 6, sizeof *S->tbox)) {
+    if (!buf_reserve((void **)&S->tbox, &S->tbox_cap, 6 * R->n + 6, sizeof *S->tbox) ||
+        !buf_reserve((void **)&S->tplane, &S->tplane_cap, R->n + 1, sizeof *S->tplane)) {
         S->oom = 1;
         return FEMLOD_REJECT_INTERSECTION;
     }
-    /* boxes of the new triangles and of the whole new fan */
+    /* boxes and planes of the new triangles (once, not per pair) and the
+     * box of the whole new fan */
     double lo[3], hi[3];
     for (int k = 0; k < 3; k++) lo[k] = hi[k] = p[k];
     for (size_t r = 0; r < R->n; r++) {
         const double *a = P(S, R->a[r]), *b = P(S, R->b[r]);
+        const double *T[3] = {p, a, b};
+        fl_tri_plane_of(T, S->tplane + r);
         double *bx = S->tbox + 6 * r;
         for (int k = 0; k < 3; k++) {
             bx[k] = mn(p[k], mn(a[k], b[k])) - S->eps;
@@ -958,7 +964,8 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                             const double *T[3] = {p, P(S, R->a[r]), P(S, R->b[r])};
                             uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
                             STAT(tritri);
-                            if (fl_tri_tri_intersect(T, tid, Q, t, S->eps)) return FEMLOD_REJECT_INTERSECTION;
+                            if (fl_tri_tri_intersect_p(T, tid, S->tplane + r, Q, t, S->eps))
+                                return FEMLOD_REJECT_INTERSECTION;
                         }
                     }
                     blk = B->next;
@@ -977,7 +984,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                 continue;
             const double *Q[3] = {p, P(S, R->a[s2]), P(S, R->b[s2])};
             uint32_t qid[3] = {K_ID, R->a[s2], R->b[s2]};
-            if (fl_tri_tri_intersect(T, tid, Q, qid, S->eps)) return FEMLOD_REJECT_INTERSECTION;
+            if (fl_tri_tri_intersect_p(T, tid, S->tplane + r, Q, qid, S->eps)) return FEMLOD_REJECT_INTERSECTION;
         }
     }
     return NO_REASON;
@@ -1031,7 +1038,13 @@ static int log_collapse(simp *S, ring *R, const double p[3]) {
             S->vmark[R->sopp[s]] = mk;
             S->vstars[nvs++] = S->node[R->sopp[s]];
         }
-    qsort(S->vstars, nvs, sizeof *S->vstars, cmp_u32);
+    /* at most a few dozen distinct ids: insertion sort beats qsort's calls */
+    for (size_t x = 1; x < nvs; x++) {
+        uint32_t v = S->vstars[x];
+        size_t y = x;
+        for (; y > 0 && S->vstars[y - 1] > v; y--) S->vstars[y] = S->vstars[y - 1];
+        S->vstars[y] = v;
+    }
     double es = 0.0;
     /* e_size: mean distance from k to its vstars (paper 5.1) */
     mk = next_stamp(S);
@@ -1440,6 +1453,7 @@ static void simp_free(simp *S) {
     free(S->pdst);
     free(S->newcone);
     free(S->tbox);
+    free(S->tplane);
 }
 
 static int bad_number(double x) { return isnan(x) || isinf(x); }
@@ -1814,7 +1828,8 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
             }
             if (n2 == 2) {
                 const float *x = S->fn + 3 * (size_t)f2[0], *y = S->fn + 3 * (size_t)f2[1];
-                double c = (double)x[0] * y[0] + (double)x[1] * y[1] + (double)x[2] * y[2];
+                /* a degenerate face (NaN normal) counts as normal 0: c = 0 */
+                double c = isnan(x[0]) || isnan(y[0]) ? 0.0 : (double)x[0] * y[0] + (double)x[1] * y[1] + (double)x[2] * y[2];
                 if (c < cos_feat) sharp = 0.5 * (1.0 - c);
             }
         }
@@ -1859,6 +1874,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
         if (!ALLOC(S->cone, 4 * nt)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
         for (size_t f = 0; f < nt; f++) {
             memcpy(S->cone + 4 * f, S->fn + 3 * f, 3 * sizeof(float));
+            if (isnan(S->cone[4 * f])) S->cone[4 * f] = S->cone[4 * f + 1] = S->cone[4 * f + 2] = 0.0f;
             S->cone[4 * f + 3] = 0.0f;
         }
     }
