@@ -156,6 +156,9 @@ typedef struct simp {
     int maxval, keep_boundary, area_w;
     int tol_on, dev_on, st_on, sz_on, val_on, cone_on;
     double minst2, maxsz2, cos_nc, cos_nc2, maxdev2, eps;
+    /* tri_eval's limits with "off" folded in (a limit nothing crosses), so
+     * its tests need no flags: size^2, turn cos^2, stretch^2 (phase 1 only) */
+    double lim_sz2, lim_turn2, lim_st2;
 
     /* vertices: slot s holds input vertex node[s] at first (Morton order) */
     size_t nv;
@@ -423,6 +426,11 @@ static int gather(simp *S, ring *R, uint32_t e) {
     double szsum = 0.0;
     size_t szn = 0;
     size_t n = 0, ns = 0;
+    /* locals: the stores into R below could otherwise alias them */
+    const uint32_t *const tri = S->tri;
+    const double *const finv = S->finv;
+    uint32_t *const rface = R->face, *const ra = R->a, *const rb = R->b;
+    uint8_t *const rfrom = R->from_j;
     for (int side = 0; side < 2; side++) {
         uint32_t v = side ? j : i, o = side ? i : j;
         const uint32_t *fl = S->refs + S->fstart[v];
@@ -430,7 +438,7 @@ static int gather(simp *S, ring *R, uint32_t e) {
         if (FEMLOD_SIMPLIFY_SZDIF_RING) szn += cnt;
         for (uint32_t m = 0; m < cnt; m++) {
             uint32_t f = fl[m];
-            const uint32_t *t = S->tri + 3 * (size_t)f;
+            const uint32_t *t = tri + 3 * (size_t)f;
             uint32_t t0 = t[0], t1 = t[1], t2 = t[2], a, b;
             if (t0 == v) {
                 a = t1;
@@ -442,7 +450,7 @@ static int gather(simp *S, ring *R, uint32_t e) {
                 a = t0;
                 b = t1;
             }
-            if (FEMLOD_SIMPLIFY_SZDIF_RING) szsum += S->finv[f];
+            if (FEMLOD_SIMPLIFY_SZDIF_RING) szsum += finv[f];
             if (a == o || b == o) {
                 if (side == 0) {
                     if (ns == 2) return FEMLOD_REJECT_TOPOLOGY;
@@ -456,10 +464,10 @@ static int gather(simp *S, ring *R, uint32_t e) {
                 }
                 continue;
             }
-            R->face[n] = f;
-            R->a[n] = a;
-            R->b[n] = b;
-            R->from_j[n] = (uint8_t)side;
+            rface[n] = f;
+            ra[n] = a;
+            rb[n] = b;
+            rfrom[n] = (uint8_t)side;
             n++;
         }
     }
@@ -556,7 +564,7 @@ static inline int tri_eval(const simp *S, const ring *R, size_t r, const double 
     sub3(eb, b, p);
     double la2 = dot3(ea, ea), lb2 = dot3(eb, eb), lab2 = R->lab2[r];
     double L2 = mx(la2, mx(lb2, lab2));
-    if (S->sz_on && L2 > S->maxsz2) return FEMLOD_REJECT_SIZE;
+    if (L2 > S->lim_sz2) return FEMLOD_REJECT_SIZE;
     cross3(n, ea, eb);
     double n2 = dot3(n, n);
     if (!(n2 > 0.0)) return FEMLOD_REJECT_STRETCH;
@@ -564,12 +572,12 @@ static inline int tri_eval(const simp *S, const ring *R, size_t r, const double 
     const float *fo = S->fn + 3 * (size_t)R->face[r];
     double d = n[0] * fo[0] + n[1] * fo[1] + n[2] * fo[2]; /* NaN: the old face was degenerate, no test */
     if (d <= 0.0) return FEMLOD_REJECT_FOLDOVER;
-    if (S->cos_nc > 0.0 && d * d < S->cos_nc2 * n2) return FEMLOD_REJECT_FOLDOVER;
+    if (d * d < S->lim_turn2 * n2) return FEMLOD_REJECT_FOLDOVER;
     /* C2: St = sqrt(3) |n| / (s L), compared squared */
     double s = 0.5 * (sqrt(la2) + sqrt(lb2) + R->lab[r]);
     double den = s * s * L2;
     double st2 = 3.0 * n2 / den;
-    if (S->phase == 1 && S->st_on && st2 < S->minst2) return FEMLOD_REJECT_STRETCH;
+    if (st2 < S->lim_st2) return FEMLOD_REJECT_STRETCH;
     double st = sqrt(st2);
     if (st > 1.0) st = 1.0;
     *st_out = st;
@@ -1504,6 +1512,9 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
         S->cos_nc = 0.0; /* flips only */
         S->cos_nc2 = 0.0;
     }
+    S->lim_sz2 = S->sz_on ? S->maxsz2 : __builtin_inf();
+    S->lim_turn2 = S->cos_nc > 0.0 ? S->cos_nc2 : 0.0; /* d^2 < 0 never holds */
+    S->lim_st2 = -1.0;                                 /* set per phase */
     S->keep_boundary = o->keep_boundary != 0;
     S->area_w = o->area_weighted != 0;
     (void)mean_edge;
@@ -1957,6 +1968,7 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
     /* pre-phase (4.2.2): only edges of triangles below min_stretch */
     if (S->st_on) {
         S->phase = 0;
+        S->lim_st2 = -1.0; /* the pre-phase compares with the replaced faces instead */
         if (evaluate_all(S)) {
             int r = run_queue(S, o, live0, &next);
             if (r != 1) {
@@ -1967,6 +1979,7 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
         while (fl_heap_size(&S->heap)) fl_heap_pop(&S->heap, NULL);
     }
     S->phase = 1;
+    S->lim_st2 = S->st_on ? S->minst2 : -1.0;
     size_t last_retry = (size_t)-1;
     for (;;) {
         if (S->live <= S->target) break;
