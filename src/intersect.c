@@ -325,22 +325,23 @@ int fl_grid_init(fl_grid *g, const double lo[3], const double hi[3], double h, s
     g->inv_h = 1.0 / h;
     for (int k = 0; k < 3; k++) g->origin[k] = lo[k];
     size_t cells = (size_t)g->n[0] * (size_t)g->n[1] * (size_t)g->n[2];
-    g->head = fl_alloc(cells, sizeof *g->head);
-    g->count = fl_calloc(cells, sizeof *g->count);
+    g->cell = fl_alloc(cells, sizeof *g->cell);
     g->capblocks = cells / 2 + 1024;
     g->blocks = fl_alloc(g->capblocks, sizeof *g->blocks);
     g->free_block = UINT32_MAX;
-    if (!g->head || !g->count || !g->blocks) {
+    if (!g->cell || !g->blocks) {
         fl_grid_free(g);
         return 0;
     }
-    for (size_t c = 0; c < cells; c++) g->head[c] = UINT32_MAX;
+    for (size_t c = 0; c < cells; c++) {
+        g->cell[c].head = UINT32_MAX;
+        g->cell[c].count = 0;
+    }
     return 1;
 }
 
 void fl_grid_free(fl_grid *g) {
-    free(g->head);
-    free(g->count);
+    free(g->cell);
     free(g->blocks);
     memset(g, 0, sizeof *g);
 }
@@ -383,15 +384,15 @@ int fl_grid_insert(fl_grid *g, uint32_t item, const double lo[3], const double h
         for (int y = c0[1]; y <= c1[1]; y++)
             for (int x = c0[0]; x <= c1[0]; x++) {
                 size_t c = fl_grid_cell(g, x, y, z);
-                uint32_t fill = g->count[c] % FL_GRID_BLOCK;
+                uint32_t fill = g->cell[c].count % FL_GRID_BLOCK;
                 if (fill == 0) { /* head full or absent */
                     uint32_t b = new_block(g);
                     if (b == UINT32_MAX) return 0;
-                    g->blocks[b].next = g->head[c];
-                    g->head[c] = b;
+                    g->blocks[b].next = g->cell[c].head;
+                    g->cell[c].head = b;
                 }
-                g->blocks[g->head[c]].item[fill] = item;
-                g->count[c]++;
+                g->blocks[g->cell[c].head].item[fill] = item;
+                g->cell[c].count++;
             }
     return 1;
 }
@@ -403,9 +404,9 @@ void fl_grid_remove(fl_grid *g, uint32_t item, const double lo[3], const double 
         for (int y = c0[1]; y <= c1[1]; y++)
             for (int x = c0[0]; x <= c1[0]; x++) {
                 size_t c = fl_grid_cell(g, x, y, z);
-                uint32_t n = g->count[c];
+                uint32_t n = g->cell[c].count;
                 if (n == 0) continue;
-                uint32_t hb = g->head[c], last = (n - 1) % FL_GRID_BLOCK;
+                uint32_t hb = g->cell[c].head, last = (n - 1) % FL_GRID_BLOCK;
                 /* find the item: the head holds last+1 items, the rest full blocks */
                 uint32_t b = hb, lim = last + 1;
                 int found = 0;
@@ -420,9 +421,9 @@ void fl_grid_remove(fl_grid *g, uint32_t item, const double lo[3], const double 
                     lim = FL_GRID_BLOCK;
                 }
                 if (!found) continue;
-                g->count[c] = n - 1;
+                g->cell[c].count = n - 1;
                 if (last == 0) {
-                    g->head[c] = g->blocks[hb].next;
+                    g->cell[c].head = g->blocks[hb].next;
                     g->blocks[hb].next = g->free_block;
                     g->free_block = hb;
                 }

@@ -45,11 +45,15 @@ typedef struct fl_grid_block {
     uint32_t next;
 } fl_grid_block;
 
+typedef struct fl_grid_cell_info {
+    uint32_t head;  /* first block (the partly filled one), UINT32_MAX if none */
+    uint32_t count; /* items */
+} fl_grid_cell_info;
+
 typedef struct fl_grid {
     double origin[3], inv_h, h;
     int n[3];
-    uint32_t *head;  /* per cell: first block (the partly filled one), UINT32_MAX if none */
-    uint32_t *count; /* per cell: items */
+    fl_grid_cell_info *cell; /* per cell; head and count together: one cache line per cell visited */
     fl_grid_block *blocks;
     size_t nblocks, capblocks;
     uint32_t free_block;

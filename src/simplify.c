@@ -500,8 +500,12 @@ static int gather(simp *S, ring *R, uint32_t e) {
         if (S->val[x] - 1 < minval) return FEMLOD_REJECT_TOPOLOGY;
         if (S->vflag[x] & V_NONMANIFOLD) return FEMLOD_REJECT_TOPOLOGY;
     }
-    /* two feature edges of one removed face would merge into one */
-    for (size_t s = 0; s < R->ns; s++) {
+    /* two feature edges of one removed face would merge into one (only
+     * possible when i or j is on a feature: fdeg counts feature edges,
+     * collapse keeps the count; fixed vertices, corners among them, are
+     * checked whatever their count) */
+    int any_feature = feati || featj || fixi || fixj;
+    for (size_t s = 0; s < R->ns && any_feature; s++) {
         const uint32_t *te = S->tedge + 3 * (size_t)R->sface[s];
         int nfeat = 0;
         for (int c = 0; c < 3; c++)
@@ -944,8 +948,8 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
             for (int x = c0[0]; x <= c1[0]; x++) {
                 size_t cell = fl_grid_cell(&S->grid, x, y, z);
                 STAT(cells);
-                uint32_t cnt = S->grid.count[cell];
-                uint32_t blk = S->grid.head[cell];
+                uint32_t cnt = S->grid.cell[cell].count;
+                uint32_t blk = S->grid.cell[cell].head;
                 uint32_t lim = cnt ? (cnt - 1) % FL_GRID_BLOCK + 1 : 0;
                 while (blk != UINT32_MAX) {
                     const fl_grid_block *B = S->grid.blocks + blk;
