@@ -137,8 +137,27 @@ static void interval(const double *const T[3], const double d[3], const double D
     *hi = b;
 }
 
+void fl_tri_plane_of(const double *const T[3], fl_tri_plane *pl) {
+    double e1[3], e2[3];
+    sub3(e1, T[1], T[0]);
+    sub3(e2, T[2], T[0]);
+    cross3(pl->n, e1, e2);
+    pl->len = sqrt(dot3(pl->n, pl->n));
+}
+
 int fl_tri_tri_intersect(const double *const P[3], const uint32_t pid[3], const double *const Q[3],
                          const uint32_t qid[3], double eps) {
+    fl_tri_plane pp;
+    fl_tri_plane_of(P, &pp);
+    return fl_tri_tri_intersect_p(P, pid, &pp, Q, qid, eps);
+}
+
+/* Q's plane is computed only when P's plane does not already separate the
+ * two: most pairs the simplifier tests are neighbours lying on one side of
+ * each other's plane. The answer is that of computing both first (a
+ * degenerate Q gives 0 either way). */
+int fl_tri_tri_intersect_p(const double *const P[3], const uint32_t pid[3], const fl_tri_plane *pp,
+                           const double *const Q[3], const uint32_t qid[3], double eps) {
     int sp[3] = {-1, -1, -1}, shared = 0; /* sp[c]: Q's corner equal to P's corner c */
     for (int c = 0; c < 3; c++)
         for (int e = 0; e < 3; e++)
@@ -148,17 +167,14 @@ int fl_tri_tri_intersect(const double *const P[3], const uint32_t pid[3], const 
             }
     if (shared >= 3) return 1;
 
-    double e1[3], e2[3], np[3], nq[3];
-    sub3(e1, P[1], P[0]);
-    sub3(e2, P[2], P[0]);
-    cross3(np, e1, e2);
-    sub3(e1, Q[1], Q[0]);
-    sub3(e2, Q[2], Q[0]);
-    cross3(nq, e1, e2);
-    double lp = sqrt(dot3(np, np)), lq = sqrt(dot3(nq, nq));
-    if (!(lp > 0.0) || !(lq > 0.0)) return 0; /* degenerate: the quality checks reject those */
+    const double *np = pp->n;
+    double lp = pp->len;
+    if (!(lp > 0.0)) return 0; /* degenerate: the quality checks reject those */
+    fl_tri_plane qp;
 
     if (shared == 2) {
+        fl_tri_plane_of(Q, &qp);
+        if (!(qp.len > 0.0)) return 0;
         /* Neighbours across an edge overlap only when folded flat onto each
          * other: the opposite corners on the same side of the edge and the
          * dihedral angle below about 0.6 degrees. */
@@ -185,6 +201,10 @@ int fl_tri_tri_intersect(const double *const P[3], const uint32_t pid[3], const 
         }
     double dq[3], dp[3];
     if (plane_side(P, np, lp, Q, dq, eps, qmask)) return 0;
+    fl_tri_plane_of(Q, &qp);
+    const double *nq = qp.n;
+    double lq = qp.len;
+    if (!(lq > 0.0)) return 0;
     if (plane_side(Q, nq, lq, P, dp, eps, pmask)) return 0;
 
     if (dq[0] == 0.0 && dq[1] == 0.0 && dq[2] == 0.0) {
@@ -305,22 +325,23 @@ int fl_grid_init(fl_grid *g, const double lo[3], const double hi[3], double h, s
     g->inv_h = 1.0 / h;
     for (int k = 0; k < 3; k++) g->origin[k] = lo[k];
     size_t cells = (size_t)g->n[0] * (size_t)g->n[1] * (size_t)g->n[2];
-    g->head = fl_alloc(cells, sizeof *g->head);
-    g->count = fl_calloc(cells, sizeof *g->count);
+    g->cell = fl_alloc(cells, sizeof *g->cell);
     g->capblocks = cells / 2 + 1024;
     g->blocks = fl_alloc(g->capblocks, sizeof *g->blocks);
     g->free_block = UINT32_MAX;
-    if (!g->head || !g->count || !g->blocks) {
+    if (!g->cell || !g->blocks) {
         fl_grid_free(g);
         return 0;
     }
-    for (size_t c = 0; c < cells; c++) g->head[c] = UINT32_MAX;
+    for (size_t c = 0; c < cells; c++) {
+        g->cell[c].head = UINT32_MAX;
+        g->cell[c].count = 0;
+    }
     return 1;
 }
 
 void fl_grid_free(fl_grid *g) {
-    free(g->head);
-    free(g->count);
+    free(g->cell);
     free(g->blocks);
     memset(g, 0, sizeof *g);
 }
@@ -363,15 +384,15 @@ int fl_grid_insert(fl_grid *g, uint32_t item, const double lo[3], const double h
         for (int y = c0[1]; y <= c1[1]; y++)
             for (int x = c0[0]; x <= c1[0]; x++) {
                 size_t c = fl_grid_cell(g, x, y, z);
-                uint32_t fill = g->count[c] % FL_GRID_BLOCK;
+                uint32_t fill = g->cell[c].count % FL_GRID_BLOCK;
                 if (fill == 0) { /* head full or absent */
                     uint32_t b = new_block(g);
                     if (b == UINT32_MAX) return 0;
-                    g->blocks[b].next = g->head[c];
-                    g->head[c] = b;
+                    g->blocks[b].next = g->cell[c].head;
+                    g->cell[c].head = b;
                 }
-                g->blocks[g->head[c]].item[fill] = item;
-                g->count[c]++;
+                g->blocks[g->cell[c].head].item[fill] = item;
+                g->cell[c].count++;
             }
     return 1;
 }
@@ -383,9 +404,9 @@ void fl_grid_remove(fl_grid *g, uint32_t item, const double lo[3], const double 
         for (int y = c0[1]; y <= c1[1]; y++)
             for (int x = c0[0]; x <= c1[0]; x++) {
                 size_t c = fl_grid_cell(g, x, y, z);
-                uint32_t n = g->count[c];
+                uint32_t n = g->cell[c].count;
                 if (n == 0) continue;
-                uint32_t hb = g->head[c], last = (n - 1) % FL_GRID_BLOCK;
+                uint32_t hb = g->cell[c].head, last = (n - 1) % FL_GRID_BLOCK;
                 /* find the item: the head holds last+1 items, the rest full blocks */
                 uint32_t b = hb, lim = last + 1;
                 int found = 0;
@@ -400,9 +421,9 @@ void fl_grid_remove(fl_grid *g, uint32_t item, const double lo[3], const double 
                     lim = FL_GRID_BLOCK;
                 }
                 if (!found) continue;
-                g->count[c] = n - 1;
+                g->cell[c].count = n - 1;
                 if (last == 0) {
-                    g->head[c] = g->blocks[hb].next;
+                    g->cell[c].head = g->blocks[hb].next;
                     g->blocks[hb].next = g->free_block;
                     g->free_block = hb;
                 }

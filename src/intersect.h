@@ -16,6 +16,17 @@
 FL_INTERNAL int fl_tri_tri_intersect(const double *const P[3], const uint32_t pid[3],
                                      const double *const Q[3], const uint32_t qid[3], double eps);
 
+/* The unnormalised normal (T1 - T0) x (T2 - T0) and its length. */
+typedef struct fl_tri_plane {
+    double n[3], len;
+} fl_tri_plane;
+FL_INTERNAL void fl_tri_plane_of(const double *const T[3], fl_tri_plane *pl);
+/* fl_tri_tri_intersect with P's plane given (fl_tri_plane_of(P)): the same
+ * answer, for testing one triangle against many. */
+FL_INTERNAL int fl_tri_tri_intersect_p(const double *const P[3], const uint32_t pid[3],
+                                       const fl_tri_plane *pp, const double *const Q[3],
+                                       const uint32_t qid[3], double eps);
+
 /* Squared distance from p to triangle (a, b, c) (Ericson, Real-Time
  * Collision Detection, 5.1.5). */
 FL_INTERNAL double fl_point_tri_dist2(const double p[3], const double a[3], const double b[3],
@@ -34,11 +45,15 @@ typedef struct fl_grid_block {
     uint32_t next;
 } fl_grid_block;
 
+typedef struct fl_grid_cell_info {
+    uint32_t head;  /* first block (the partly filled one), UINT32_MAX if none */
+    uint32_t count; /* items */
+} fl_grid_cell_info;
+
 typedef struct fl_grid {
     double origin[3], inv_h, h;
     int n[3];
-    uint32_t *head;  /* per cell: first block (the partly filled one), UINT32_MAX if none */
-    uint32_t *count; /* per cell: items */
+    fl_grid_cell_info *cell; /* per cell; head and count together: one cache line per cell visited */
     fl_grid_block *blocks;
     size_t nblocks, capblocks;
     uint32_t free_block;

@@ -156,6 +156,9 @@ typedef struct simp {
     int maxval, keep_boundary, area_w;
     int tol_on, dev_on, st_on, sz_on, val_on, cone_on;
     double minst2, maxsz2, cos_nc, cos_nc2, maxdev2, eps;
+    /* tri_eval's limits with "off" folded in (a limit nothing crosses), so
+     * its tests need no flags: size^2, turn cos^2, stretch^2 (phase 1 only) */
+    double lim_sz2, lim_turn2, lim_st2;
 
     /* vertices: slot s holds input vertex node[s] at first (Morton order) */
     size_t nv;
@@ -176,7 +179,7 @@ typedef struct simp {
     size_t nt, live, nt_in;
     uint32_t *tri, *tedge;
     uint32_t *fin; /* input triangle index of each face slot */
-    float *fn;   /* unit normal (0 for degenerate) */
+    float *fn;   /* unit normal (NaN for degenerate) */
     float *fsz;  /* longest edge */
     double *finv; /* 1 / fsz, for Sz_DIF */
     float *cone; /* axis xyz, half-angle (radians) */
@@ -209,6 +212,8 @@ typedef struct simp {
     size_t npts;    /* points gathered by the last deviation check */
     double *tbox;   /* per ring face: box of the new triangle */
     size_t tbox_cap;
+    fl_tri_plane *tplane; /* per ring face: plane of the new triangle */
+    size_t tplane_cap;
     float *newcone; /* per ring face */
     size_t newcone_cap;
     uint32_t vstars[MAX_VSTARS + 2];
@@ -270,7 +275,9 @@ static void face_update_cache(simp *S, uint32_t f) {
     sub3(e2, c, a);
     cross3(n, e1, e2);
     double l = sqrt(dot3(n, n));
-    for (int k = 0; k < 3; k++) S->fn[3 * (size_t)f + k] = l > 0 ? (float)(n[k] / l) : 0.0f;
+    /* a degenerate face gets a NaN normal: every comparison with it is
+     * false, so tri_eval skips the turn test without a branch of its own */
+    for (int k = 0; k < 3; k++) S->fn[3 * (size_t)f + k] = l > 0 ? (float)(n[k] / l) : __builtin_nanf("");
     double L2 = mx(dot3(e1, e1), mx(dot3(e2, e2), dist2(b, c)));
     S->fsz[f] = (float)sqrt(L2);
     S->finv[f] = 1.0 / (double)S->fsz[f];
@@ -419,6 +426,11 @@ static int gather(simp *S, ring *R, uint32_t e) {
     double szsum = 0.0;
     size_t szn = 0;
     size_t n = 0, ns = 0;
+    /* locals: the stores into R below could otherwise alias them */
+    const uint32_t *const tri = S->tri;
+    const double *const finv = S->finv;
+    uint32_t *const rface = R->face, *const ra = R->a, *const rb = R->b;
+    uint8_t *const rfrom = R->from_j;
     for (int side = 0; side < 2; side++) {
         uint32_t v = side ? j : i, o = side ? i : j;
         const uint32_t *fl = S->refs + S->fstart[v];
@@ -426,7 +438,7 @@ static int gather(simp *S, ring *R, uint32_t e) {
         if (FEMLOD_SIMPLIFY_SZDIF_RING) szn += cnt;
         for (uint32_t m = 0; m < cnt; m++) {
             uint32_t f = fl[m];
-            const uint32_t *t = S->tri + 3 * (size_t)f;
+            const uint32_t *t = tri + 3 * (size_t)f;
             uint32_t t0 = t[0], t1 = t[1], t2 = t[2], a, b;
             if (t0 == v) {
                 a = t1;
@@ -438,7 +450,7 @@ static int gather(simp *S, ring *R, uint32_t e) {
                 a = t0;
                 b = t1;
             }
-            if (FEMLOD_SIMPLIFY_SZDIF_RING) szsum += S->finv[f];
+            if (FEMLOD_SIMPLIFY_SZDIF_RING) szsum += finv[f];
             if (a == o || b == o) {
                 if (side == 0) {
                     if (ns == 2) return FEMLOD_REJECT_TOPOLOGY;
@@ -452,10 +464,10 @@ static int gather(simp *S, ring *R, uint32_t e) {
                 }
                 continue;
             }
-            R->face[n] = f;
-            R->a[n] = a;
-            R->b[n] = b;
-            R->from_j[n] = (uint8_t)side;
+            rface[n] = f;
+            ra[n] = a;
+            rb[n] = b;
+            rfrom[n] = (uint8_t)side;
             n++;
         }
     }
@@ -488,8 +500,12 @@ static int gather(simp *S, ring *R, uint32_t e) {
         if (S->val[x] - 1 < minval) return FEMLOD_REJECT_TOPOLOGY;
         if (S->vflag[x] & V_NONMANIFOLD) return FEMLOD_REJECT_TOPOLOGY;
     }
-    /* two feature edges of one removed face would merge into one */
-    for (size_t s = 0; s < R->ns; s++) {
+    /* two feature edges of one removed face would merge into one (only
+     * possible when i or j is on a feature: fdeg counts feature edges,
+     * collapse keeps the count; fixed vertices, corners among them, are
+     * checked whatever their count) */
+    int any_feature = feati || featj || fixi || fixj;
+    for (size_t s = 0; s < R->ns && any_feature; s++) {
         const uint32_t *te = S->tedge + 3 * (size_t)R->sface[s];
         int nfeat = 0;
         for (int c = 0; c < 3; c++)
@@ -552,22 +568,20 @@ static inline int tri_eval(const simp *S, const ring *R, size_t r, const double 
     sub3(eb, b, p);
     double la2 = dot3(ea, ea), lb2 = dot3(eb, eb), lab2 = R->lab2[r];
     double L2 = mx(la2, mx(lb2, lab2));
-    if (S->sz_on && L2 > S->maxsz2) return FEMLOD_REJECT_SIZE;
+    if (L2 > S->lim_sz2) return FEMLOD_REJECT_SIZE;
     cross3(n, ea, eb);
     double n2 = dot3(n, n);
     if (!(n2 > 0.0)) return FEMLOD_REJECT_STRETCH;
     /* foldover: the normal may not flip nor turn past max_normal_change */
     const float *fo = S->fn + 3 * (size_t)R->face[r];
-    double d = n[0] * fo[0] + n[1] * fo[1] + n[2] * fo[2];
-    if (fo[0] != 0.0f || fo[1] != 0.0f || fo[2] != 0.0f) {
-        if (d <= 0.0) return FEMLOD_REJECT_FOLDOVER;
-        if (S->cos_nc > 0.0 && d * d < S->cos_nc2 * n2) return FEMLOD_REJECT_FOLDOVER;
-    }
+    double d = n[0] * fo[0] + n[1] * fo[1] + n[2] * fo[2]; /* NaN: the old face was degenerate, no test */
+    if (d <= 0.0) return FEMLOD_REJECT_FOLDOVER;
+    if (d * d < S->lim_turn2 * n2) return FEMLOD_REJECT_FOLDOVER;
     /* C2: St = sqrt(3) |n| / (s L), compared squared */
     double s = 0.5 * (sqrt(la2) + sqrt(lb2) + R->lab[r]);
     double den = s * s * L2;
     double st2 = 3.0 * n2 / den;
-    if (S->phase == 1 && S->st_on && st2 < S->minst2) return FEMLOD_REJECT_STRETCH;
+    if (st2 < S->lim_st2) return FEMLOD_REJECT_STRETCH;
     double st = sqrt(st2);
     if (st > 1.0) st = 1.0;
     *st_out = st;
@@ -899,15 +913,19 @@ static int deviation_check(simp *S, ring *R, const double p[3], size_t *np) {
  * overlaps, the triangles being replaced excepted, and against the other new
  * triangles. Shared corners and edges are told to the test by vertex id. */
 static int intersect_check(simp *S, ring *R, const double p[3]) {
-    if (!buf_reserve((void **)&S->tbox, &S->tbox_cap, 6 * R->n + 6, sizeof *S->tbox)) {
+    if (!buf_reserve((void **)&S->tbox, &S->tbox_cap, 6 * R->n + 6, sizeof *S->tbox) ||
+        !buf_reserve((void **)&S->tplane, &S->tplane_cap, R->n + 1, sizeof *S->tplane)) {
         S->oom = 1;
         return FEMLOD_REJECT_INTERSECTION;
     }
-    /* boxes of the new triangles and of the whole new fan */
+    /* boxes and planes of the new triangles (once, not per pair) and the
+     * box of the whole new fan */
     double lo[3], hi[3];
     for (int k = 0; k < 3; k++) lo[k] = hi[k] = p[k];
     for (size_t r = 0; r < R->n; r++) {
         const double *a = P(S, R->a[r]), *b = P(S, R->b[r]);
+        const double *T[3] = {p, a, b};
+        fl_tri_plane_of(T, S->tplane + r);
         double *bx = S->tbox + 6 * r;
         for (int k = 0; k < 3; k++) {
             bx[k] = mn(p[k], mn(a[k], b[k])) - S->eps;
@@ -930,8 +948,8 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
             for (int x = c0[0]; x <= c1[0]; x++) {
                 size_t cell = fl_grid_cell(&S->grid, x, y, z);
                 STAT(cells);
-                uint32_t cnt = S->grid.count[cell];
-                uint32_t blk = S->grid.head[cell];
+                uint32_t cnt = S->grid.cell[cell].count;
+                uint32_t blk = S->grid.cell[cell].head;
                 uint32_t lim = cnt ? (cnt - 1) % FL_GRID_BLOCK + 1 : 0;
                 while (blk != UINT32_MAX) {
                     const fl_grid_block *B = S->grid.blocks + blk;
@@ -958,7 +976,8 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                             const double *T[3] = {p, P(S, R->a[r]), P(S, R->b[r])};
                             uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
                             STAT(tritri);
-                            if (fl_tri_tri_intersect(T, tid, Q, t, S->eps)) return FEMLOD_REJECT_INTERSECTION;
+                            if (fl_tri_tri_intersect_p(T, tid, S->tplane + r, Q, t, S->eps))
+                                return FEMLOD_REJECT_INTERSECTION;
                         }
                     }
                     blk = B->next;
@@ -977,7 +996,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                 continue;
             const double *Q[3] = {p, P(S, R->a[s2]), P(S, R->b[s2])};
             uint32_t qid[3] = {K_ID, R->a[s2], R->b[s2]};
-            if (fl_tri_tri_intersect(T, tid, Q, qid, S->eps)) return FEMLOD_REJECT_INTERSECTION;
+            if (fl_tri_tri_intersect_p(T, tid, S->tplane + r, Q, qid, S->eps)) return FEMLOD_REJECT_INTERSECTION;
         }
     }
     return NO_REASON;
@@ -1031,7 +1050,13 @@ static int log_collapse(simp *S, ring *R, const double p[3]) {
             S->vmark[R->sopp[s]] = mk;
             S->vstars[nvs++] = S->node[R->sopp[s]];
         }
-    qsort(S->vstars, nvs, sizeof *S->vstars, cmp_u32);
+    /* at most a few dozen distinct ids: insertion sort beats qsort's calls */
+    for (size_t x = 1; x < nvs; x++) {
+        uint32_t v = S->vstars[x];
+        size_t y = x;
+        for (; y > 0 && S->vstars[y - 1] > v; y--) S->vstars[y] = S->vstars[y - 1];
+        S->vstars[y] = v;
+    }
     double es = 0.0;
     /* e_size: mean distance from k to its vstars (paper 5.1) */
     mk = next_stamp(S);
@@ -1440,6 +1465,7 @@ static void simp_free(simp *S) {
     free(S->pdst);
     free(S->newcone);
     free(S->tbox);
+    free(S->tplane);
 }
 
 static int bad_number(double x) { return isnan(x) || isinf(x); }
@@ -1490,6 +1516,9 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
         S->cos_nc = 0.0; /* flips only */
         S->cos_nc2 = 0.0;
     }
+    S->lim_sz2 = S->sz_on ? S->maxsz2 : __builtin_inf();
+    S->lim_turn2 = S->cos_nc > 0.0 ? S->cos_nc2 : 0.0; /* d^2 < 0 never holds */
+    S->lim_st2 = -1.0;                                 /* set per phase */
     S->keep_boundary = o->keep_boundary != 0;
     S->area_w = o->area_weighted != 0;
     (void)mean_edge;
@@ -1814,7 +1843,8 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
             }
             if (n2 == 2) {
                 const float *x = S->fn + 3 * (size_t)f2[0], *y = S->fn + 3 * (size_t)f2[1];
-                double c = (double)x[0] * y[0] + (double)x[1] * y[1] + (double)x[2] * y[2];
+                /* a degenerate face (NaN normal) counts as normal 0: c = 0 */
+                double c = isnan(x[0]) || isnan(y[0]) ? 0.0 : (double)x[0] * y[0] + (double)x[1] * y[1] + (double)x[2] * y[2];
                 if (c < cos_feat) sharp = 0.5 * (1.0 - c);
             }
         }
@@ -1859,6 +1889,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
         if (!ALLOC(S->cone, 4 * nt)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
         for (size_t f = 0; f < nt; f++) {
             memcpy(S->cone + 4 * f, S->fn + 3 * f, 3 * sizeof(float));
+            if (isnan(S->cone[4 * f])) S->cone[4 * f] = S->cone[4 * f + 1] = S->cone[4 * f + 2] = 0.0f;
             S->cone[4 * f + 3] = 0.0f;
         }
     }
@@ -1941,6 +1972,7 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
     /* pre-phase (4.2.2): only edges of triangles below min_stretch */
     if (S->st_on) {
         S->phase = 0;
+        S->lim_st2 = -1.0; /* the pre-phase compares with the replaced faces instead */
         if (evaluate_all(S)) {
             int r = run_queue(S, o, live0, &next);
             if (r != 1) {
@@ -1951,6 +1983,7 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
         while (fl_heap_size(&S->heap)) fl_heap_pop(&S->heap, NULL);
     }
     S->phase = 1;
+    S->lim_st2 = S->st_on ? S->minst2 : -1.0;
     size_t last_retry = (size_t)-1;
     for (;;) {
         if (S->live <= S->target) break;
