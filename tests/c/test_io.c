@@ -874,6 +874,66 @@ static femlod_mesh *awkward_mesh(void) {
     return m;
 }
 
+/* Every reader on every file of the corpus (tests/data and tests/data/bad,
+ * whatever its format: a file of the wrong format is hostile input too):
+ * either a mesh that validates, or one error of one line that names the
+ * file. Under ASan, any read out of bounds is a finding. */
+static void test_every_reader_every_file(void) {
+    static const femlod_format readers[] = {
+        FEMLOD_FORMAT_OBJ, FEMLOD_FORMAT_STL, FEMLOD_FORMAT_STL_ASCII, FEMLOD_FORMAT_STL_BINARY,
+        FEMLOD_FORMAT_OFF, FEMLOD_FORMAT_PLY, FEMLOD_FORMAT_GLTF, FEMLOD_FORMAT_GLB,
+        FEMLOD_FORMAT_MSH, FEMLOD_FORMAT_MEDIT};
+    const char *dirs[2] = {"", "/bad"};
+    size_t files = 0, loaded = 0, refused = 0;
+    for (int d = 0; d < 2; d++) {
+        char dir[600];
+        snprintf(dir, sizeof dir, "%s%s", FEMLOD_TEST_DATA, dirs[d]);
+        DIR *dp = opendir(dir);
+        CHECK(dp != NULL);
+        if (!dp) continue;
+        struct dirent *e;
+        while ((e = readdir(dp))) {
+            char p[1200];
+            snprintf(p, sizeof p, "%s/%s", dir, e->d_name);
+            struct stat st;
+            if (e->d_name[0] == '.' || stat(p, &st) != 0 || !S_ISREG(st.st_mode)) continue;
+            if (strstr(e->d_name, ".md")) continue;
+            files++;
+            for (size_t r = 0; r < sizeof readers / sizeof readers[0]; r++) {
+                femlod_read_options ro = FEMLOD_READ_OPTIONS_INIT;
+                ro.format = readers[r];
+                femlod_mesh *m = NULL;
+                femlod_error err = {0, ""};
+                femlod_status s = femlod_mesh_read(&m, p, &ro, &err);
+                if (s == FEMLOD_OK) {
+                    loaded++;
+                    CHECK(m != NULL);
+                    femlod_mesh *copy = NULL;
+                    if (m)
+                        CHECK(femlod_mesh_create(&copy, femlod_mesh_positions(m),
+                                                 femlod_mesh_vertex_count(m), femlod_mesh_triangles(m),
+                                                 femlod_mesh_triangle_count(m), NULL) == FEMLOD_OK);
+                    femlod_mesh_free(copy);
+                    femlod_mesh_free(m);
+                } else {
+                    refused++;
+                    CHECK(m == NULL);
+                    CHECK(err.status == s);
+                    CHECK(strstr(err.message, e->d_name) != NULL);
+                    CHECK(strchr(err.message, '\n') == NULL);
+                    if (strstr(err.message, e->d_name) == NULL)
+                        fprintf(stderr, "  %s as %s: %s\n", e->d_name, femlod_format_name(readers[r]),
+                                err.message);
+                }
+            }
+        }
+        closedir(dp);
+    }
+    printf("every reader on every corpus file: %zu files x %zu readers: %zu loaded, %zu refused\n",
+           files, sizeof readers / sizeof readers[0], loaded, refused);
+    CHECK(files > 100);
+}
+
 static void test_round_trips(void) {
     char p[600];
     femlod_mesh *a = awkward_mesh();
@@ -1303,6 +1363,7 @@ int main(void) {
     test_off();
     test_ply();
     test_bad_files();
+    test_every_reader_every_file();
     test_round_trips();
     test_atomic_writes();
     test_symlink_writes();
