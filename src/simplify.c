@@ -224,6 +224,7 @@ typedef struct simp {
     size_t collapses, prephase;
     size_t rejected[FEMLOD_REJECT_COUNT];
     int oom;
+    int cancelled;  /* the progress callback asked to stop during evaluate_all */
 #if FEMLOD_SIMPLIFY_STATS
     simp_stats stats;
 #endif
@@ -1388,9 +1389,16 @@ static int reevaluate_ring(simp *S, uint32_t k) {
 /* Evaluates every live edge (phase 1 start and the final retry), or in the
  * pre-phase every edge of a triangle below min_stretch. Returns how many
  * entered the queue. */
-static size_t evaluate_all(simp *S) {
+/* Also polls the progress callback (with the fraction done so far) every
+ * 65,536 edges: on a big mesh this pass takes seconds, and a time cap or a
+ * user's cancel must reach it (the result does not depend on the polls). */
+static size_t evaluate_all(simp *S, const femlod_simplify_options *o, double done) {
     size_t n = 0;
     for (size_t ed = 0; ed < S->ne; ed++) {
+        if (o->progress && (ed & 0xFFFFu) == 0xFFFFu && o->progress(o->progress_payload, done)) {
+            S->cancelled = 1;
+            return n;
+        }
         if (S->eflag[ed] & E_DEAD) continue;
         if (fl_heap_contains(&S->heap, (uint32_t)ed)) continue;
         int eligible = 1;
@@ -1973,7 +1981,12 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
     if (S->st_on) {
         S->phase = 0;
         S->lim_st2 = -1.0; /* the pre-phase compares with the replaced faces instead */
-        if (evaluate_all(S)) {
+        size_t queued = evaluate_all(S, o, 0.0);
+        if (S->cancelled) {
+            *why = FEMLOD_STOP_CANCELLED;
+            return 2;
+        }
+        if (queued) {
             int r = run_queue(S, o, live0, &next);
             if (r != 1) {
                 if (r == 2) *why = FEMLOD_STOP_CANCELLED;
@@ -1992,7 +2005,14 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
          * (an intersection with a triangle that has moved away since) */
         if (last_retry == S->collapses) break;
         last_retry = S->collapses;
-        if (!evaluate_all(S)) break;
+        size_t goal = live0 > S->target ? live0 - S->target : 1;
+        double done = (double)(live0 - S->live) / (double)goal;
+        size_t queued = evaluate_all(S, o, done > 1.0 ? 1.0 : done);
+        if (S->cancelled) {
+            *why = FEMLOD_STOP_CANCELLED;
+            return 2;
+        }
+        if (!queued) break;
         if (S->oom) return 0;
         int r = run_queue(S, o, live0, &next);
         if (r != 1) {
