@@ -281,12 +281,6 @@ static femlod_status orient(uint32_t *tri, size_t nt, const double *pos, size_t 
         seen[t0] = 1;
         while (qh < qt) {
             uint32_t t = queue[qh++];
-            uint32_t c[3] = {tri[3 * (size_t)t], tri[3 * (size_t)t + 1], tri[3 * (size_t)t + 2]};
-            if (flip[t]) {
-                uint32_t x = c[1];
-                c[1] = c[2];
-                c[2] = x;
-            }
             for (int s = 0; s < 3; s++) {
                 uint32_t e = adj.tri_edges[3 * (size_t)t + (size_t)s];
                 if (e == UINT32_MAX) continue;
@@ -410,22 +404,21 @@ femlod_status femlod_mesh_repair(femlod_mesh **out, const femlod_mesh *mesh,
     {
         uint32_t *idx = fl_alloc(nv ? nv : 1, sizeof(uint32_t));
         if (!idx) goto nomem;
+        /* idx: UINT32_MAX for a vertex no triangle uses, then the new index */
         for (size_t v = 0; v < nv; v++) idx[v] = UINT32_MAX;
         for (size_t k = 0; k < 3 * nt; k++) idx[tri[k]] = 0;
-        size_t used = 0, welded_away = 0;
+        size_t used = 0;
         for (size_t v = 0; v < nv; v++) {
+            /* a vertex welded into another is gone either way (counted in welded) */
             int is_leader = v >= mesh->nv || map[v] == v;
-            if (idx[v] == 0 || (!o.drop_unused && is_leader)) {
+            if (idx[v] != UINT32_MAX || (!o.drop_unused && is_leader)) {
                 idx[v] = (uint32_t)used;
                 memmove(pos + 3 * used, pos + 3 * v, 3 * sizeof(double));
                 used++;
             } else if (is_leader) {
                 r.unused++;
-            } else {
-                welded_away++;
             }
         }
-        (void)welded_away;
         for (size_t k = 0; k < 3 * nt; k++) tri[k] = idx[tri[k]];
         free(idx);
         nv = used;

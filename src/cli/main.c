@@ -562,6 +562,14 @@ static int cmd_info(lua_State *L, const cli *c) {
     return EXIT_OK;
 }
 
+/* The line convert and repair print for the file they wrote. */
+static void print_written(const char *out, const char *format, lua_Integer triangles,
+                          lua_Integer vertices) {
+    femlod_format f = format ? femlod_format_from_name(format) : femlod_format_from_path(out);
+    printf("%s: %lld triangles, %lld vertices (%s)\n", out, (long long)triangles,
+           (long long)vertices, f == FEMLOD_FORMAT_AUTO ? "?" : femlod_format_name(f));
+}
+
 static int cmd_convert(lua_State *L, const cli *c) {
     static const char *const keys[] = {"format", "input_format", "color_by", "normals", NULL};
     int st = check_pairs(L, c, keys, "format, input_format, color_by, normals");
@@ -593,10 +601,7 @@ static int cmd_convert(lua_State *L, const cli *c) {
         call_method(L, mesh, "counts", 0, 1);
         lua_getfield(L, -1, "triangles");
         lua_getfield(L, -2, "vertices");
-        femlod_format f = format ? femlod_format_from_name(format) : femlod_format_from_path(out);
-        printf("%s: %lld triangles, %lld vertices (%s)\n", out,
-               (long long)lua_tointeger(L, -2), (long long)lua_tointeger(L, -1),
-               f == FEMLOD_FORMAT_AUTO ? "?" : femlod_format_name(f));
+        print_written(out, format, lua_tointeger(L, -2), lua_tointeger(L, -1));
     }
     return EXIT_OK;
 }
@@ -672,9 +677,7 @@ static int cmd_repair(lua_State *L, const cli *c) {
     }
     lua_getfield(L, rep, "triangles");
     lua_getfield(L, rep, "vertices");
-    femlod_format f = format ? femlod_format_from_name(format) : femlod_format_from_path(out);
-    printf("%s: %lld triangles, %lld vertices (%s)\n", out, (long long)lua_tointeger(L, -2),
-           (long long)lua_tointeger(L, -1), f == FEMLOD_FORMAT_AUTO ? "?" : femlod_format_name(f));
+    print_written(out, format, lua_tointeger(L, -2), lua_tointeger(L, -1));
     return EXIT_OK;
 }
 
