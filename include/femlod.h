@@ -438,6 +438,16 @@ typedef struct femlod_simplify_options {
      * that tolerance keeps its units (method-notes.md). Default 0 (the
      * paper's uniform weights). */
     int area_weighted;
+    /* Fast passes (docs/simplify.md "Fast passes"): a factor F >= 1 makes
+     * every collapse above F * target triangles come from passes over the
+     * mesh in bands of decreasing priority instead of the exact greedy order
+     * (every collapse still meets every threshold; about 2x faster on a
+     * 1.25M-triangle input, average stretch about 0.01-0.02 lower); below
+     * F * target the exact order finishes. Without a target, the passes run
+     * until no valid edge is left and the exact queue then finishes. 0 or
+     * FEMLOD_SIMPLIFY_OFF: the exact order throughout (the default); a value
+     * in (0, 1) fails with FEMLOD_EINPUT. */
+    double fast_above;
     /* Input vertex indices that must keep their exact position (loads,
      * boundary conditions); out-of-range indices fail with FEMLOD_EINPUT.
      * Collapses may merge a neighbour into a locked vertex, never move it. */
@@ -453,7 +463,7 @@ typedef struct femlod_simplify_options {
     void *progress_payload;
 } femlod_simplify_options;
 
-#define FEMLOD_SIMPLIFY_OPTIONS_INIT {0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, NULL, 0, NULL, NULL, NULL, NULL}
+#define FEMLOD_SIMPLIFY_OPTIONS_INIT {0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, NULL, 0, NULL, NULL, NULL, NULL}
 
 typedef enum femlod_stop_reason {
     FEMLOD_STOP_TARGET = 0,        /* the target count was reached */
@@ -487,6 +497,7 @@ typedef struct femlod_simplify_result {
     femlod_stop_reason stop_reason;
     size_t collapses;              /* all, pre-phase included */
     size_t prephase_collapses;     /* of which removed input triangles below min_stretch */
+    size_t fast_collapses;         /* of which came from fast passes (options.fast_above) */
     /* Refused edge evaluations by first failing check. An edge is evaluated
      * each time its neighbourhood changes, so these count evaluations, not
      * edges: they tell which threshold binds. */
@@ -501,6 +512,7 @@ typedef struct femlod_simplify_result {
     double tolerance, max_deviation, min_stretch, max_size, feature_angle, feature_weight,
         max_normal_change;
     int max_valence;
+    double fast_above; /* the fast_above factor, FEMLOD_SIMPLIFY_OFF when off */
 } femlod_simplify_result;
 
 /* The collapse log: every collapse in order, in a vertex numbering made for

@@ -52,6 +52,7 @@
 
 #include <assert.h>
 #include <math.h>
+#include <float.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -220,6 +221,13 @@ typedef struct simp {
     uint8_t lfaces[3 * 1024];
 
     int phase;
+    /* fast passes (band_run): the factor (0: off), per slot the pass that
+     * locked it and the best key of its edges, per edge its last key */
+    double fast;
+    uint32_t *vlock;
+    float *vbest, *ekey;
+    uint32_t pass;
+    size_t swept;
     femlod_collapse_log *log;
     size_t collapses, prephase;
     size_t rejected[FEMLOD_REJECT_COUNT];
@@ -1443,6 +1451,9 @@ static void simp_free(simp *S) {
     free(S->vflag);
     free(S->fdeg);
     free(S->vmark);
+    free(S->vlock);
+    free(S->vbest);
+    free(S->ekey);
     free(S->refs);
     free(S->tri);
     free(S->fin);
@@ -1495,6 +1506,9 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
         return fl_error(err, FEMLOD_EINPUT, "simplify: max_valence %d is below 3", o->max_valence);
     if (o->feature_angle > 180.0 || o->max_normal_change > 180.0)
         return fl_error(err, FEMLOD_EINPUT, "simplify: angles are degrees in [0, 180]");
+    if (bad_number(o->fast_above) || (o->fast_above > 0.0 && o->fast_above < 1.0))
+        return fl_error(err, FEMLOD_EINPUT, "simplify: fast_above %g is not a factor >= 1", o->fast_above);
+    S->fast = o->fast_above >= 1.0 ? o->fast_above : 0.0;
     S->target = o->target;
     if (o->ratio > 0.0) S->target = (size_t)floor(o->ratio * (double)nt + 0.5);
 
@@ -1974,6 +1988,173 @@ static int run_queue(simp *S, const femlod_simplify_options *o, size_t live0, si
     return 1;
 }
 
+/* {====== fast passes (docs/simplify.md "Fast passes") */
+
+#ifndef FEMLOD_SIMPLIFY_BAND
+#define FEMLOD_SIMPLIFY_BAND 0.9 /* each pass lowers the threshold by this factor */
+#endif
+
+/* Marks an edge's key out of date (an endpoint moved). E_STALE is free in
+ * the passes: the lazy queue (FEMLOD_SIMPLIFY_BOUND) is not used there. */
+static inline void band_stale(simp *S, uint32_t ed) { S->eflag[ed] |= E_STALE; }
+
+/* One visit of slot v in a pass with threshold tau: evaluates v's edges
+ * whose key is out of date, then tries v's best edge if it reaches tau and
+ * its other end is not locked in this pass. Returns 1 collapsed, 0 not, -1
+ * on ENOMEM. */
+static int band_vertex(simp *S, uint32_t v, double tau) {
+    ring *R = &S->R;
+    uint32_t em = next_stamp(S);
+    uint32_t best = UINT32_MAX;
+    float bkey = -1.0f, vb = -1.0f, second = -1.0f;
+    const uint32_t *fl = S->refs + S->fstart[v];
+    uint32_t cnt = S->fcount[v];
+    for (uint32_t a = 0; a < cnt; a++) {
+        uint32_t f = fl[a];
+        const uint32_t *t = S->tri + 3 * (size_t)f;
+        for (int c = 0; c < 3; c++) {
+            if (t[c] != v && t[(c + 1) % 3] != v) continue;
+            uint32_t ed = S->tedge[3 * (size_t)f + c];
+            if (S->emark[ed] == em) continue;
+            S->emark[ed] = em;
+            if (S->eflag[ed] & E_DEAD) continue;
+            if (S->eflag[ed] & E_STALE) {
+                double rho = evaluate(S, R, ed);
+                if (S->oom) return -1;
+                S->ekey[ed] = rho < 0.0 ? -1.0f : (float)rho;
+                S->eflag[ed] &= (uint8_t)~E_STALE;
+            }
+            float key = S->ekey[ed];
+            if (key > vb) vb = key;
+            uint32_t u = S->ev[2 * (size_t)ed] == v ? S->ev[2 * (size_t)ed + 1] : S->ev[2 * (size_t)ed];
+            if (S->vlock[u] == S->pass || !(key >= (float)tau)) continue;
+            if (key > bkey || (key == bkey && ed < best)) {
+                if (bkey > second) second = bkey;
+                bkey = key;
+                best = ed;
+            } else if (key > second) {
+                second = key;
+            }
+        }
+    }
+    S->vbest[v] = vb;
+    if (best == UINT32_MAX) return 0;
+    /* its key may predate changes around its far end: evaluate again */
+    double rho = evaluate(S, R, best);
+    if (S->oom) return -1;
+    S->ekey[best] = rho < 0.0 ? -1.0f : (float)rho;
+    int chosen = -1;
+    if (rho >= tau && link_check(S, R) == NO_REASON) {
+        for (int c = 0; c < R->ncand && chosen < 0; c++) {
+            if (!R->ok[c] || R->rho[c] < tau) continue;
+            int w = expensive_checks(S, R, c);
+            if (S->oom) return -1;
+            if (w == NO_REASON) chosen = c;
+            else S->rejected[w]++;
+        }
+    } else if (rho >= tau) {
+        S->rejected[FEMLOD_REJECT_TOPOLOGY]++;
+    }
+    if (chosen < 0) {
+        /* refused for reasons outside its key (topology, the costly
+         * checks): out of these passes until its neighbourhood changes */
+        if (rho >= tau) S->ekey[best] = -1.0f;
+        float rest = mx(second, S->ekey[best]);
+        S->vbest[v] = rest;
+        return 0;
+    }
+    uint32_t k = R->i;
+    if (!collapse(S, R, chosen)) return -1;
+    S->swept++;
+    /* k's edges have a new endpoint: out of date; the edges around keep
+     * their keys (docs/simplify.md says what that costs); k and its ring
+     * wait for the next pass */
+    S->vlock[k] = S->pass;
+    S->vbest[k] = FLT_MAX;
+    const uint32_t *fk = S->refs + S->fstart[k];
+    for (uint32_t m = 0; m < S->fcount[k]; m++) {
+        uint32_t f = fk[m];
+        const uint32_t *t = S->tri + 3 * (size_t)f;
+        for (int c = 0; c < 3; c++) {
+            S->vlock[t[c]] = S->pass;
+            S->vbest[t[c]] = FLT_MAX;
+            if (t[c] == k || t[(c + 1) % 3] == k) {
+                uint32_t ed = S->tedge[3 * (size_t)f + c];
+                band_stale(S, ed);
+                S->eflag[ed] &= (uint8_t)~E_OPT;
+            }
+        }
+    }
+    return 1;
+}
+
+/* Phase 1 in passes until at most floor_live triangles are left or no edge
+ * is valid: every edge is evaluated once; then passes over the slots (in
+ * Morton order: each collapse works next to the previous one's memory)
+ * collapse each vertex's best edge whose key reaches the pass's threshold,
+ * which starts at FEMLOD_SIMPLIFY_BAND times the best key and drops
+ * by that factor per pass. Returns 0 on ENOMEM, 2 cancelled, 1 otherwise. */
+static int band_run(simp *S, const femlod_simplify_options *o, size_t floor_live, size_t live0, size_t *next) {
+    S->vlock = fl_calloc(S->nv, sizeof *S->vlock);
+    S->vbest = fl_alloc(S->nv, sizeof *S->vbest);
+    S->ekey = fl_alloc(S->ne, sizeof *S->ekey);
+    if (!S->vlock || !S->vbest || !S->ekey) return 0;
+    for (size_t v = 0; v < S->nv; v++) S->vbest[v] = -1.0f;
+    float top = -1.0f;
+    for (size_t ed = 0; ed < S->ne; ed++) {
+        if (o->progress && (ed & 0xFFFFu) == 0xFFFFu && o->progress(o->progress_payload, 0.0)) return 2;
+        float key = -1.0f;
+        if (!(S->eflag[ed] & E_DEAD)) {
+            double rho = evaluate(S, &S->R, (uint32_t)ed);
+            if (S->oom) return 0;
+            if (rho >= 0.0) key = (float)rho;
+        }
+        S->ekey[ed] = key;
+        uint32_t a = S->ev[2 * ed], b = S->ev[2 * ed + 1];
+        if (key > S->vbest[a]) S->vbest[a] = key;
+        if (key > S->vbest[b]) S->vbest[b] = key;
+        if (key > top) top = key;
+    }
+    double tau = (double)top * FEMLOD_SIMPLIFY_BAND;
+    int r = 1;
+    while (top >= 0.0f && S->live > floor_live) {
+        if (++S->pass == 0) { /* wrapped: unlock all */
+            memset(S->vlock, 0, S->nv * sizeof *S->vlock);
+            S->pass = 1;
+        }
+        size_t done = 0;
+        top = -1.0f; /* the best key left below tau */
+        for (uint32_t v = 0; v < S->nv && S->live > floor_live; v++) {
+            if ((S->vflag[v] & V_DEAD) || !S->fcount[v]) continue;
+            if (S->vlock[v] != S->pass && S->vbest[v] >= (float)tau) {
+                int c = band_vertex(S, v, tau);
+                if (c < 0) return 0;
+                if (c > 0) {
+                    done++;
+                    if (progress(S, o, live0, next)) return 2;
+                    continue;
+                }
+            }
+            if (S->vbest[v] > top && S->vbest[v] < FLT_MAX) top = S->vbest[v];
+        }
+        if (S->oom) return 0;
+        /* next band; a pass without a collapse jumps to the best key left */
+        tau = done ? tau * FEMLOD_SIMPLIFY_BAND : mn(tau * FEMLOD_SIMPLIFY_BAND, (double)top);
+        if (done) top = FLT_MAX - 1.0f; /* keys changed: go on */
+    }
+    /* back to the queue's conventions */
+    for (size_t ed = 0; ed < S->ne; ed++) S->eflag[ed] &= (uint8_t)~E_STALE;
+    free(S->vlock);
+    free(S->vbest);
+    free(S->ekey);
+    S->vlock = NULL;
+    S->vbest = NULL;
+    S->ekey = NULL;
+    return r;
+}
+
+/* }====== */
+
 static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_reason *why) {
     size_t live0 = S->live, next = 0;
     *why = FEMLOD_STOP_NO_VALID_EDGE;
@@ -1997,6 +2178,17 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
     }
     S->phase = 1;
     S->lim_st2 = S->st_on ? S->minst2 : -1.0;
+    if (S->fast > 0.0) {
+        double fl = S->fast * (double)S->target;
+        size_t floor_live = fl < (double)SIZE_MAX ? (size_t)fl : SIZE_MAX;
+        if (S->live > floor_live) {
+            int r = band_run(S, o, floor_live, live0, &next);
+            if (r != 1) {
+                if (r == 2) *why = FEMLOD_STOP_CANCELLED;
+                return r;
+            }
+        }
+    }
     size_t last_retry = (size_t)-1;
     for (;;) {
         if (S->live <= S->target) break;
@@ -2162,6 +2354,7 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
         result->stop_reason = why;
         result->collapses = S->collapses;
         result->prephase_collapses = S->prephase;
+        result->fast_collapses = S->swept;
         memcpy(result->rejected, S->rejected, sizeof result->rejected);
         size_t bad = 0;
         for (size_t f = 0; f < m->nt; f++) {
@@ -2181,6 +2374,7 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
         result->feature_weight = S->feat_w > 0.0 ? S->feat_w : FEMLOD_SIMPLIFY_OFF;
         result->max_normal_change = S->cone_on ? S->max_nc : FEMLOD_SIMPLIFY_OFF;
         result->max_valence = S->val_on ? S->maxval : -1;
+        result->fast_above = S->fast > 0.0 ? S->fast : FEMLOD_SIMPLIFY_OFF;
         result->seconds = now_seconds() - t0;
     }
     *out = m;

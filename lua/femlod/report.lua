@@ -189,8 +189,10 @@ function M.stats(s)
     th[i] = format("%s %s", k, v == false and off or type(v) == "number" and num(v) or "?")
   end
   return concat({
-    format("stop: %s; %s (%d in the pre-phase) in %.3f s", s.stop_reason,
-      plural(s.collapses, "collapse"), s.prephase_collapses, s.seconds),
+    format("stop: %s; %s (%d in the pre-phase%s) in %.3f s", s.stop_reason,
+      plural(s.collapses, "collapse"), s.prephase_collapses,
+      (s.fast_collapses or 0) > 0 and format(", %d in fast passes", s.fast_collapses) or "",
+      s.seconds),
     "rejected: " .. concat(rej, ", "),
     format("violating input: %s; dropped degenerate: %d", plural(s.violating_input, "triangle"),
       s.dropped_degenerate),

@@ -49,7 +49,7 @@ static const char *const simplify_keys[] = {
     "target",         "ratio",          "tolerance",         "max_deviation",
     "min_stretch",    "max_size",       "max_valence",       "feature_angle",
     "feature_weight", "max_normal_change", "keep_boundary",  "area_weighted",
-    "lock",           "progress",       NULL};
+    "fast_above",          "lock",           "progress",       NULL};
 
 /* The thresholds of type double that `false` switches off, in the order of
  * femlod_simplify_options; max is the largest value allowed. */
@@ -145,6 +145,17 @@ const char *fl_simplify_read_options(lua_State *L, int idx, femlod_simplify_opti
         if (t != LUA_TNUMBER || !isint || n < 3 || n > INT_MAX)
             return bad_value(L, "integer >= 3", off);
         o->max_valence = (int)n;
+    }
+    lua_pop(L, 1);
+
+    *key = "fast_above";
+    t = lua_getfield(L, idx, "fast_above");
+    if (t == LUA_TBOOLEAN) {
+        o->fast_above = lua_toboolean(L, -1) ? 2.0 : FEMLOD_SIMPLIFY_OFF;
+    } else if (t != LUA_TNIL) {
+        double v = lua_tonumber(L, -1);
+        if (t != LUA_TNUMBER || !(v >= 1.0 && isfinite(v))) return bad_value(L, "number >= 1 or boolean", NULL);
+        o->fast_above = v;
     }
     lua_pop(L, 1);
 
@@ -1146,6 +1157,7 @@ static int hierarchy_stats(lua_State *L) {
     lua_setfield(L, -2, "stop_reason");
     set_integer(L, "collapses", r->collapses);
     set_integer(L, "prephase_collapses", r->prephase_collapses);
+    set_integer(L, "fast_collapses", r->fast_collapses);
     lua_createtable(L, 0, FEMLOD_REJECT_COUNT);
     for (int k = 0; k < FEMLOD_REJECT_COUNT; k++)
         set_integer(L, femlod_reject_name((femlod_reject)k), r->rejected[k]);

@@ -43,7 +43,7 @@ do
   T.eq(err, "", "--help: nothing on stderr")
   for _, want in ipairs { "^usage: femlod %[options%] COMMAND", "\n  run RECIPE%.lua ", "\n  info MESH ",
     "\n  convert IN OUT ", "\n  simplify IN OUT ", "%-%-target N | %-%-ratio R", "%-%-min%-stretch X",
-    "%-%-max%-normal%-change DEG", "%-%-keep%-boundary", "%-%-lock I,J,K", "%-%-hierarchy PART%.flh",
+    "%-%-max%-normal%-change DEG", "%-%-keep%-boundary", "%-%-lock I,J,K", "%-%-fast%-above F", "%-%-hierarchy PART%.flh",
     "\n  lod PART%.flh OUT %-%-size T\n", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-%-quiet ", "\n  %-%-traceback ",
     "Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded" } do
     T.check(out:find(want), "--help mentions " .. want)
@@ -441,6 +441,18 @@ do
   for i = 1, 3 do kept = kept + (set[string.format("%.17g %.17g %.17g", pos[i][1], pos[i][2], pos[i][3])] and 1 or 0) end
   T.check(kept < 3, "without --lock some of vertices 1-3 move: " .. kept .. " kept")
 
+  -- --fast-above: the passes show in the stop line, the thresholds hold
+  local out5 = path("simplified_fast.obj")
+  code, text, err = run("simplify", fandisk, out5, "--target", "2000", "--fast-above", "2")
+  T.eq(code, 0, "simplify --fast-above 2: " .. err)
+  T.check(text:find("\nstop: target; %d+ collapses %(0 in the pre%-phase, %d+ in fast passes%) in "),
+    "--fast-above: the stop line counts the fast collapses: " .. text)
+  local q5 = femlod.load(out5):quality()
+  T.check(q5.triangles <= 2000 and q5.stretch_min >= 0.2 and q5.valence_max <= 12, "--fast-above keeps the thresholds")
+  code, text = run("simplify", fandisk, out5, "--target", "2000", "--fast-above", "off")
+  T.eq(code, 0, "--fast-above off")
+  T.check(text:find("\nstop: target; %d+ collapses %(0 in the pre%-phase%) in "), "--fast-above off: exact: " .. text)
+
   -- Usage errors: exit 2, nothing written, nothing on stdout.
   local never = path("never_simplified.obj")
   os.remove(never)
@@ -468,10 +480,11 @@ do
   simplify_usage("femlod: --lock: vertex 6476 out of range (1..6475)", "--lock", "1,6476")
   simplify_usage("femlod: option given twice: 'target'", "--target", "100", "target=200")
   simplify_usage("femlod: unknown parameter 'targt' (valid: target, ratio, tolerance, max_deviation, min_stretch, "
-    .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, lock, "
+    .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, fast_above, lock, "
     .. "hierarchy)",
     "targt=100")
   simplify_usage("femlod: expected name=value, got '3000'", "--keep-boundary", "3000")
+  simplify_usage("femlod: --fast-above: number >= 1 or boolean expected, got 0.5", "--fast-above", "0.5")
   usage("femlod: missing an input and an output file", "simplify", fandisk)
   usage("femlod: simplify: IN and OUT come first, then the options", "simplify", "--target", "100", fandisk, never)
 

@@ -178,7 +178,7 @@ end
 -- {====== the stats table
 do
   local s = A:stats()
-  local ints = { "triangles", "vertices", "collapses", "prephase_collapses", "violating_input",
+  local ints = { "triangles", "vertices", "collapses", "prephase_collapses", "fast_collapses", "violating_input",
     "dropped_degenerate" }
   for _, k in ipairs(ints) do T.eq(math.type(s[k]), "integer", "stats." .. k .. " is an integer") end
   T.eq(math.type(s.seconds), "float", "stats.seconds is a float")
@@ -267,13 +267,31 @@ do
 end
 -- }======
 
+-- {====== fast passes: the same guarantees, fewer exact collapses
+do
+  local exact = fandisk:simplify { target = 2000 }
+  local fast = fandisk:simplify { target = 2000, fast_above = 2 }
+  local fast2 = fandisk:simplify { target = 2000, fast_above = true }
+  local s, e = fast:stats(), exact:stats()
+  T.eq(e.fast_collapses, 0, "exact by default")
+  T.check(s.fast_collapses > 0 and s.fast_collapses < s.collapses,
+    "fast_above = 2: " .. s.fast_collapses .. " of " .. s.collapses .. " collapses in passes")
+  T.eq(fast2:stats().fast_collapses, s.fast_collapses, "fast_above = true is 2")
+  local q, qe = fast:mesh():quality(), exact:mesh():quality()
+  T.check(q.stretch_min >= 0.2 and q.valence_max <= 12, "fast passes keep the thresholds")
+  T.check(q.stretch_avg >= qe.stretch_avg - 0.05, "fast quality near exact: " .. q.stretch_avg .. " vs " .. qe.stretch_avg)
+  T.check(report.stats(fast):find("in fast passes"), "report.stats tells the fast passes")
+  T.check(not report.stats(exact):find("fast passes"), "and says nothing without them")
+end
+-- }======
+
 -- {====== option errors: text and position
 local env = { m = fandisk, femlod = femlod }
 local E = "code:1: bad argument #1 to 'simplify' ("
-T.errmsg(E .. "unknown key 'targt'; valid keys: area_weighted, feature_angle, feature_weight, "
+T.errmsg(E .. "unknown key 'targt'; valid keys: area_weighted, fast_above, feature_angle, feature_weight, "
   .. "keep_boundary, lock, max_deviation, max_normal_change, max_size, max_valence, min_stretch, "
   .. "progress, ratio, target, tolerance)", "m:simplify { targt = 100 }", env)
-T.errmsg(E .. "unexpected number key 1; valid keys: area_weighted, feature_angle, feature_weight, "
+T.errmsg(E .. "unexpected number key 1; valid keys: area_weighted, fast_above, feature_angle, feature_weight, "
   .. "keep_boundary, lock, max_deviation, max_normal_change, max_size, max_valence, min_stretch, "
   .. "progress, ratio, target, tolerance)", "m:simplify { 100 }", env)
 T.errmsg(E .. "target: integer >= 1 expected, got 0)", "m:simplify { target = 0 }", env)
@@ -298,6 +316,8 @@ T.errmsg(E .. "max_valence: integer >= 3 or false expected, got 2)", "m:simplify
 T.errmsg(E .. "max_valence: integer >= 3 or false expected, got 7.5)", "m:simplify { max_valence = 7.5 }", env)
 T.errmsg(E .. "keep_boundary: boolean expected, got 1)", "m:simplify { keep_boundary = 1 }", env)
 T.errmsg(E .. "area_weighted: boolean expected, got string)", "m:simplify { area_weighted = 'yes' }", env)
+T.errmsg(E .. "fast_above: number >= 1 or boolean expected, got 0.5)", "m:simplify { fast_above = 0.5 }", env)
+T.errmsg(E .. "fast_above: number >= 1 or boolean expected, got string)", "m:simplify { fast_above = '2' }", env)
 T.errmsg(E .. "lock[2]: index 6476 out of range (1..6475))", "m:simplify { lock = { 1, 6476 } }", env)
 T.errmsg(E .. "lock[1]: index 0 out of range (1..6475))", "m:simplify { lock = { 0 } }", env)
 T.errmsg(E .. "lock[2]: index 1.5 is not a valid index)", "m:simplify { lock = { 1, 1.5 } }", env)
