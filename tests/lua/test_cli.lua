@@ -37,14 +37,14 @@ do
   T.eq(code, 0, "--version exit")
   T.check(out:find("^femlod 0%.1%.0 %(Lua 5%.4%.%d+%)\n$"), "--version text: " .. out)
   T.eq(err, "", "--version: nothing on stderr")
-  T.eq(select(2, run("-v")), out, "-v is --version")
+  T.eq(run("-v"), 2, "-v is --verbose, not --version: no command given")
   code, out, err = run("--help")
   T.eq(code, 0, "--help exit")
   T.eq(err, "", "--help: nothing on stderr")
   for _, want in ipairs { "^usage: femlod %[options%] COMMAND", "\n  run RECIPE%.lua ", "\n  info MESH ",
     "\n  convert IN OUT ", "\n  simplify IN OUT ", "%-%-target N | %-%-ratio R", "%-%-min%-stretch X",
     "%-%-max%-normal%-change DEG", "%-%-keep%-boundary", "%-%-lock I,J,K", "%-%-hierarchy PART%.flh",
-    "\n  lod PART%.flh OUT %-%-size T\n", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-%-quiet ", "\n  %-%-traceback ",
+    "\n  lod PART%.flh OUT %-%-size T\n", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-q, %-%-quiet ", "\n  %-v, %-%-verbose ", "\n  %-%-traceback ",
     "Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded" } do
     T.check(out:find(want), "--help mentions " .. want)
   end

@@ -787,7 +787,7 @@ do
   T.errmsg("code:1: bad argument #1 to 'rescale' (give exactly one of target and factor)",
     "h:rescale{ target = 3, factor = 2 }", env)
   T.errmsg("code:1: bad argument #1 to 'rescale' (give exactly one of target and factor)", "h:rescale{}", env)
-  T.errmsg("code:1: bad argument #1 to 'rescale' (unknown key 'targt'; valid keys: factor, target)",
+  T.errmsg("code:1: bad argument #1 to 'rescale' (unknown key 'targt'; valid keys: factor, progress, target)",
     "h:rescale{ targt = 3 }", env)
   T.errmsg("code:1: bad argument #1 to 'rescale' (factor: must be a positive finite number)",
     "h:rescale{ factor = -2 }", env)
@@ -971,7 +971,7 @@ do
   T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: function returned string for kappa 0.0 "
     .. "(number expected))", "h:refine_curvature { map = function(k) return 'x' end }", env)
   T.errmsg("code:1: bad argument #1 to 'refine_curvature' (unknown key 'fien'; valid keys: coarse, fine, "
-    .. "map, percentile, radius)", "h:refine_curvature { fien = 1 }", env)
+    .. "map, percentile, progress, radius)", "h:refine_curvature { fien = 1 }", env)
   T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: 'linear', 'log' or function expected, got 'cubic')",
     "h:refine_curvature { map = 'cubic' }", env)
   T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: 'linear', 'log' or function expected, got number)",
