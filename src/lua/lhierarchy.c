@@ -19,17 +19,19 @@
  *     vertex, before femlod_simplify runs; the result is an index list in a
  *     Lua-owned buffer, so a raise there (a bad index, an error inside the
  *     function) leaks nothing;
- *   - progress: called from femlod_simplify through lua_pcall; an error
- *     cancels the run, and is raised again once femlod_simplify returned
- *     and its results were freed;
+ *   - progress (fl_opts_progress, lopts.c): called from femlod_simplify,
+ *     femlod_hierarchy_create and the LOD operations through lua_pcall; an
+ *     error cancels the run, and is raised again once the core returned and
+ *     its results were freed;
  *   - the size functions of refine and coarsen: called from the core
  *     through lua_pcall (a trampoline builds the node table under it); a
  *     failure returns NaN, which stops the operation with a valid front,
  *     and is raised once the core returned.
- * While femlod_simplify runs, the input Mesh's box is empty, so a progress
- * function that closes or uses that mesh finds it closed instead of freeing
- * it under the simplifier. While a size function runs, its Hierarchy is
- * busy: using or closing it raises (inside the function).
+ * While femlod_simplify runs and its hierarchy is built, the input Mesh's
+ * box is empty, so a progress function that closes or uses that mesh finds
+ * it closed instead of freeing it under the simplifier. While a size or
+ * progress function of a LOD operation runs, its Hierarchy is busy: using or
+ * closing it raises (inside the function).
  */
 #include "lfemlod.h"
 #include "lopts.h"
@@ -291,6 +293,7 @@ static int lib_simplify(lua_State *L) {
     femlod_error err;
     femlod_mesh *simplified = NULL;
     femlod_collapse_log *log = NULL;
+    luaL_checkstack(L, 4, NULL); /* for fl_progress_call_fn, which must not raise */
     double t0 = fl_lua_clock();
     *mbox = NULL; /* busy: see the top of the file */
     femlod_status st = femlod_simplify(&simplified, &log, mesh, &so, &h->result, &err);
@@ -374,7 +377,7 @@ static int lib_load_hierarchy(lua_State *L) {
 
 fl_hierarchy *fl_lhierarchy_check(lua_State *L, int arg) {
     fl_hierarchy *h = (fl_hierarchy *)luaL_checkudata(L, arg, FL_HIERARCHY_MT);
-    if (h->busy) luaL_error(L, "attempt to use a femlod.Hierarchy inside its own size function");
+    if (h->busy) luaL_error(L, "attempt to use a femlod.Hierarchy inside its own size or progress function");
     if (!h->hier) luaL_error(L, "attempt to use a closed femlod.Hierarchy");
     return h;
 }
@@ -1220,7 +1223,7 @@ static int hierarchy_log_bytes(lua_State *L) {
 static int hierarchy_gc(lua_State *L) {
     fl_hierarchy *h = (fl_hierarchy *)luaL_checkudata(L, 1, FL_HIERARCHY_MT);
     if (h->busy)
-        return luaL_error(L, "attempt to close a femlod.Hierarchy inside its own size function");
+        return luaL_error(L, "attempt to close a femlod.Hierarchy inside its own size or progress function");
     hierarchy_release(h);
     return 0;
 }

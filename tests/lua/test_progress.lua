@@ -166,6 +166,10 @@ do
     T.checkerr("progress: function returned number %(boolean or nil expected%)", call, x, function() return 1 end)
     T.checkerr("progress: function expected, got string", call, x, "yes")
     T.eq(x:validate(), true, name .. ": valid after the errors")
+    ok, e = pcall(call, x, function() return x:counts() end)
+    T.check(not ok and e:find("attempt to use a femlod.Hierarchy inside its own size or progress function$"),
+      name .. ": the hierarchy is busy inside its progress function: " .. tostring(e))
+    T.eq(x:validate(), true, name .. ": usable again after")
   end
 
   -- the deviation of m:quality(reference) and femlod.report
