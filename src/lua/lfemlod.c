@@ -235,7 +235,8 @@ void fl_lua_log(lua_State *L, const char *fmt, ...) {
     (void)L;
     va_list ap;
     fflush(stdout); /* keep the order of interleaved lines on a terminal */
-    fputs("femlod: ", stderr);
+    /* a progress bar may be on the line: clear it (it redraws itself) */
+    fputs(isatty(2) ? "\r\033[Kfemlod: " : "femlod: ", stderr);
     va_start(ap, fmt);
     vfprintf(stderr, fmt, ap);
     va_end(ap);
