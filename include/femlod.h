@@ -68,6 +68,21 @@ const char *femlod_status_name(femlod_status status);
  * operation, which then fails with FEMLOD_ECANCELLED. */
 typedef int (*femlod_progress_fn)(void *payload, double done);
 
+/* The progress callback of an operation that takes no other options
+ * (femlod_hierarchy_create, femlod_hierarchy_rescale,
+ * femlod_hierarchy_refine_region); NULL options or a NULL progress: none.
+ * Operations with their own options struct carry the same two fields
+ * there. Every such operation calls progress with done non-decreasing,
+ * about every 1% of its work and once with done == 1 when it finishes; a
+ * nonzero return makes it fail with FEMLOD_ECANCELLED ("cancelled by the
+ * progress callback"), leaving its objects as its declaration says.
+ * The callback never changes a result. */
+typedef struct femlod_progress_options {
+    femlod_progress_fn progress;
+    void *progress_payload;
+} femlod_progress_options;
+#define FEMLOD_PROGRESS_OPTIONS_INIT {NULL, NULL}
+
 /* }==================================================================== */
 
 /* {====================================================================
@@ -223,8 +238,12 @@ typedef struct femlod_hausdorff_options {
     double spacing;      /* sample spacing in mesh units; 0 for the default */
     size_t max_samples;  /* cap per mesh side (0: 4 000 000); spacing grows to respect it,
                             but vertices and edge midpoints are always taken */
+    /* Called about every 1% of the triangles walked (both sides); a nonzero
+     * return fails with FEMLOD_ECANCELLED, *out not written. */
+    femlod_progress_fn progress;
+    void *progress_payload;
 } femlod_hausdorff_options;
-#define FEMLOD_HAUSDORFF_OPTIONS_INIT {0.0, 0}
+#define FEMLOD_HAUSDORFF_OPTIONS_INIT {0.0, 0, NULL, NULL}
 
 typedef struct femlod_hausdorff_result {
     double distance;      /* max of both one-sided distances */
@@ -585,9 +604,12 @@ typedef struct femlod_hierarchy femlod_hierarchy;
 
 /* Builds the hierarchy of a simplification from its input mesh and collapse
  * log (femlod_simplify). Fails with FEMLOD_EINPUT when the log does not
- * belong to the mesh. The front starts at the simplification's output. */
+ * belong to the mesh. The front starts at the simplification's output.
+ * options (may be NULL): progress over the collapses replayed; a cancel
+ * fails with FEMLOD_ECANCELLED and makes nothing (*out not written). */
 femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh *input,
-                                      const femlod_collapse_log *log, femlod_error *err);
+                                      const femlod_collapse_log *log,
+                                      const femlod_progress_options *options, femlod_error *err);
 void femlod_hierarchy_free(femlod_hierarchy *h);
 
 typedef enum femlod_node_state {
@@ -657,8 +679,12 @@ femlod_status femlod_hierarchy_extract(femlod_hierarchy *h, femlod_mesh **out, u
  * with the largest r, until the front has `target` triangles (or the
  * nearest count the hierarchy allows: dependencies can move it by a few).
  * S_REF is fixed from the front when the call starts, so the density
- * distribution of that front is kept. *ops gets the operations done. */
-femlod_status femlod_hierarchy_rescale(femlod_hierarchy *h, size_t target, size_t *ops,
+ * distribution of that front is kept. *ops gets the operations done.
+ * options (may be NULL): progress as the triangle count moves towards the
+ * target; a cancel fails with FEMLOD_ECANCELLED, leaving the valid front
+ * reached so far (*ops counts its operations: rescale again to go on). */
+femlod_status femlod_hierarchy_rescale(femlod_hierarchy *h, size_t target,
+                                       const femlod_progress_options *options, size_t *ops,
                                        femlod_error *err);
 
 /* Curvature LOD (paper 5.3.1a). set_curvature stores kappa (one value per
@@ -693,9 +719,15 @@ typedef struct femlod_curvature_lod_options {
     femlod_kappa_map_kind map;
     femlod_kappa_map_fn fn; /* when not NULL: T_S = fn(payload, kappa), the four above unused */
     void *payload;
+    /* Called about every 1% of the front walked (femlod_progress_options);
+     * a cancel fails with FEMLOD_ECANCELLED, the front valid and refined
+     * part way (*ops counts the splits done: refine again to go on). */
+    femlod_progress_fn progress;
+    void *progress_payload;
 } femlod_curvature_lod_options;
 #define FEMLOD_CURVATURE_LOD_OPTIONS_INIT \
-    {__builtin_nan(""), __builtin_nan(""), __builtin_nan(""), FEMLOD_KAPPA_LINEAR, NULL, NULL}
+    {__builtin_nan(""), __builtin_nan(""), __builtin_nan(""), FEMLOD_KAPPA_LINEAR, NULL, NULL, \
+     NULL, NULL}
 
 /* Refines (femlod_hierarchy_refine) with T_S from each node's kappa, as the
  * options say (NULL: the defaults). FEMLOD_EINPUT "no curvature: call
@@ -747,9 +779,13 @@ femlod_status femlod_hierarchy_region_distance(const femlod_hierarchy *h,
  * region are not split, except where a split inside needs them (the
  * hierarchy's dependencies). *ops gets the splits done, *inside (may be
  * NULL) the number of nodes at distance 0. FEMLOD_EINPUT on a negative or
- * non-finite size, grading < 1 or NaN, or a bad region. */
+ * non-finite size, grading < 1 or NaN, or a bad region. options (may be
+ * NULL): progress over the front walked; a cancel fails with
+ * FEMLOD_ECANCELLED, the front valid and refined part way (*ops and *inside
+ * as far as they got: refine again to go on). */
 femlod_status femlod_hierarchy_refine_region(femlod_hierarchy *h, const femlod_region *region,
-                                             double size, double grading, size_t *ops,
+                                             double size, double grading,
+                                             const femlod_progress_options *options, size_t *ops,
                                              size_t *inside, femlod_error *err);
 
 /* The hierarchy's input mesh (input vertices, input triangles without the
@@ -816,8 +852,13 @@ typedef struct femlod_curvature_options {
      * the mesh's distinct edges. The work per vertex grows as
      * (radius / edge length)^2. */
     double radius;
+    /* Called about every 1% of the vertices; a nonzero return fails with
+     * FEMLOD_ECANCELLED, the output arrays then partly written (their
+     * contents unspecified). */
+    femlod_progress_fn progress;
+    void *progress_payload;
 } femlod_curvature_options;
-#define FEMLOD_CURVATURE_OPTIONS_INIT {0.0}
+#define FEMLOD_CURVATURE_OPTIONS_INIT {0.0, NULL, NULL}
 
 /* Fills per-vertex arrays, caller-allocated, any of them NULL when not
  * wanted: k1, k2 and kappa have vertex_count entries, dir1 and dir2

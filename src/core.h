@@ -36,6 +36,37 @@ FL_INTERNAL femlod_status fl_error(femlod_error *err, femlod_status status, cons
 
 /* }====== */
 
+/* {====== progress (error.c): a femlod_progress_fn over `total` units of
+ * work, called when at least 1% more is done (an integer compare per unit,
+ * no division), so that the callback costs nothing per element. */
+
+typedef struct fl_progress {
+    femlod_progress_fn fn; /* NULL: never called */
+    void *payload;
+    size_t total, step, next;
+    double last;           /* the last done reported: reports never go back */
+} fl_progress;
+
+FL_INTERNAL void fl_progress_init(fl_progress *p, femlod_progress_fn fn, void *payload,
+                                  size_t total);
+/* Calls the callback with done / total (clamped to [0, 1], never below the
+ * last report); nonzero when it asked to stop. */
+FL_INTERNAL int fl_progress_report(fl_progress *p, size_t done);
+/* The cheap test to put in a loop: reports only when 1% more is done. */
+static inline int fl_progress_at(fl_progress *p, size_t done) {
+    return done >= p->next && fl_progress_report(p, done);
+}
+/* For a measure of its own: reports done (a fraction, clamped to [0, 1]) when
+ * it is at least 1% above the last report; nonzero when asked to stop. */
+FL_INTERNAL int fl_progress_fraction(fl_progress *p, double done);
+/* The final report, done == 1; its return is ignored (the work is done). */
+FL_INTERNAL void fl_progress_end(fl_progress *p);
+/* The error of a cancel: FEMLOD_ECANCELLED, "WHAT: cancelled by the
+ * progress callback". */
+FL_INTERNAL femlod_status fl_progress_cancelled(femlod_error *err, const char *what);
+
+/* }====== */
+
 /* {====== allocation: checked sizes */
 
 /* malloc(count * size) with overflow check; NULL on overflow or failure.

@@ -469,7 +469,13 @@ femlod_status femlod_mesh_curvature(const femlod_mesh *mesh,
         return st;
     }
     double r = opt.radius > 0.0 ? opt.radius : default_radius(&s);
+    fl_progress prog;
+    fl_progress_init(&prog, opt.progress, opt.progress_payload, mesh->nv);
     for (size_t v = 0; v < mesh->nv; v++) {
+        if (fl_progress_at(&prog, v)) {
+            state_free(&s);
+            return fl_progress_cancelled(err, "curvature");
+        }
         principal p;
         if (!vertex_curvature(&s, (uint32_t)v, r, &p)) memset(&p, 0, sizeof p);
         if (k1) k1[v] = p.k1;
@@ -479,5 +485,6 @@ femlod_status femlod_mesh_curvature(const femlod_mesh *mesh,
         if (dir2) memcpy(dir2 + 3 * v, p.dir2, sizeof p.dir2);
     }
     state_free(&s);
+    fl_progress_end(&prog);
     return FEMLOD_OK;
 }

@@ -46,3 +46,45 @@ void *fl_realloc(void *p, size_t count, size_t size) {
     if (__builtin_mul_overflow(count, size, &bytes)) return NULL;
     return realloc(p, bytes ? bytes : 1);
 }
+
+void fl_progress_init(fl_progress *p, femlod_progress_fn fn, void *payload, size_t total) {
+    p->fn = fn;
+    p->payload = payload;
+    p->total = total;
+    p->step = total / 100 + (total % 100 != 0); /* at most 100 reports before the end */
+    if (p->step == 0) p->step = 1;
+    p->next = fn ? 0 : SIZE_MAX;
+    p->last = 0.0;
+}
+
+int fl_progress_report(fl_progress *p, size_t done) {
+    if (!p->fn) return 0;
+    p->next = done + p->step > done ? done + p->step : SIZE_MAX;
+    double d = p->total ? (double)(done < p->total ? done : p->total) / (double)p->total : 1.0;
+    if (d < p->last) d = p->last;
+    p->last = d;
+    return p->fn(p->payload, d) != 0;
+}
+
+int fl_progress_fraction(fl_progress *p, double done) {
+    if (!p->fn) return 0;
+    if (!(done >= 0.0)) done = 0.0;
+    if (done > 1.0) done = 1.0;
+    if (p->next == 0) { /* the first report, at the start */
+        p->next = 1;
+    } else if (done < p->last + 0.01) {
+        return 0;
+    }
+    p->last = done;
+    return p->fn(p->payload, done) != 0;
+}
+
+void fl_progress_end(fl_progress *p) {
+    if (!p->fn) return;
+    p->last = 1.0;
+    (void)p->fn(p->payload, 1.0);
+}
+
+femlod_status fl_progress_cancelled(femlod_error *err, const char *what) {
+    return fl_error(err, FEMLOD_ECANCELLED, "%s: cancelled by the progress callback", what);
+}

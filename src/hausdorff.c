@@ -572,6 +572,9 @@ typedef struct side_result {
 } side_result;
 
 typedef struct sampler {
+    fl_progress *prog; /* counts triangles over both sides */
+    size_t walked;     /* triangles of the earlier side */
+    int cancelled;
     const bvh *target;
     size_t hint;
     int exact; /* every distance exact (for the mean), or only the maximum */
@@ -592,6 +595,10 @@ static void sample(sampler *q, const double p[3]) {
 static void side_run(sampler *q, side_mesh *s, double spacing) {
     const femlod_mesh *m = s->m;
     for (size_t o = 0; o < m->nt; o++) {
+        if (fl_progress_at(q->prog, q->walked + o)) {
+            q->cancelled = 1;
+            return;
+        }
         size_t t = s->order[o];
         const uint32_t *c = m->tri + 3 * t;
         for (int k = 0; k < 3; k++)
@@ -633,7 +640,8 @@ static void side_run(sampler *q, side_mesh *s, double spacing) {
  * of `to` (built on to_order). */
 static femlod_status one_side(side_result *out, const femlod_mesh *from, const uint32_t *from_order,
                               const femlod_mesh *to, const uint32_t *to_order, double spacing,
-                              double cap, int exact, femlod_error *err) {
+                              double cap, int exact, fl_progress *prog, size_t walked,
+                              femlod_error *err) {
     side_mesh s;
     bvh tree;
     femlod_status st = side_init(&s, from, from_order, err);
@@ -647,11 +655,13 @@ static femlod_status one_side(side_result *out, const femlod_mesh *from, const u
     memset(&q, 0, sizeof q);
     q.target = &tree;
     q.exact = exact;
+    q.prog = prog;
+    q.walked = walked;
     side_run(&q, &s, side_spacing(&s, spacing, cap));
     *out = q.r;
     bvh_free(&tree);
     side_free(&s);
-    return FEMLOD_OK;
+    return q.cancelled ? fl_progress_cancelled(err, "hausdorff") : FEMLOD_OK;
 }
 
 /* }====== */
@@ -681,15 +691,19 @@ femlod_status femlod_mesh_hausdorff(const femlod_mesh *mesh, const femlod_mesh *
      * search as soon as it cannot raise the maximum. */
     side_result fwd, bwd;
     uint32_t *morder = NULL, *ref_order = NULL;
+    fl_progress prog;
+    fl_progress_init(&prog, opt.progress, opt.progress_payload, mesh->nt + reference->nt);
     femlod_status st = mesh_order(&morder, mesh, err);
     if (st == FEMLOD_OK) st = mesh_order(&ref_order, reference, err);
     if (st == FEMLOD_OK)
-        st = one_side(&fwd, mesh, morder, reference, ref_order, spacing, cap, 1, err);
+        st = one_side(&fwd, mesh, morder, reference, ref_order, spacing, cap, 1, &prog, 0, err);
     if (st == FEMLOD_OK)
-        st = one_side(&bwd, reference, ref_order, mesh, morder, spacing, cap, 0, err);
+        st = one_side(&bwd, reference, ref_order, mesh, morder, spacing, cap, 0, &prog, mesh->nt,
+                      err);
     free(morder);
     free(ref_order);
     if (st != FEMLOD_OK) return st;
+    fl_progress_end(&prog);
 
     femlod_hausdorff_result r;
     memset(&r, 0, sizeof r);

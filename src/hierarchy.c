@@ -223,7 +223,8 @@ static int inc_add(incidence *in, uint32_t node, uint32_t f) {
 }
 
 femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh *mesh,
-                                      const femlod_collapse_log *log, femlod_error *err) {
+                                      const femlod_collapse_log *log,
+                                      const femlod_progress_options *options, femlod_error *err) {
     assert(out && mesh && log);
     size_t nv = femlod_collapse_log_input_vertices(log), nc = femlod_collapse_log_count(log);
     if (nv != mesh->nv)
@@ -234,6 +235,7 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
     incidence in = {0};
     uint8_t *dead = NULL;
     uint32_t *seen = NULL, *vmark = NULL;
+    fl_progress prog;
     femlod_status st = FEMLOD_OK;
     if (!h) return fl_error(err, FEMLOD_ENOMEM, "out of memory");
     h->nv = nv;
@@ -341,9 +343,15 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
         f_next++;
     }
 
-    /* Replay. */
+    /* Replay: the bulk of the work, so progress counts its collapses. */
+    fl_progress_init(&prog, options ? options->progress : NULL,
+                     options ? options->progress_payload : NULL, nc);
     size_t nrem = 0, ncre = 0;
     for (size_t c = 0; c < nc; c++) {
+        if (fl_progress_at(&prog, c)) {
+            st = fl_progress_cancelled(err, "hierarchy");
+            goto done;
+        }
         femlod_collapse col;
         femlod_collapse_log_get(log, c, &col);
         uint32_t k = (uint32_t)(nv + c), i = col.i, j = col.j;
@@ -465,6 +473,7 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
             st = fl_error(err, FEMLOD_EINPUT, "collapse log: face %zu outlives a corner", f);
             goto done;
         }
+    fl_progress_end(&prog);
 
 done:
     free(in.head);
@@ -568,6 +577,12 @@ static femlod_status threshold(const femlod_hierarchy *h, uint32_t x, double siz
 
 femlod_status femlod_hierarchy_refine(femlod_hierarchy *h, double size, femlod_size_fn fn,
                                       void *payload, size_t *ops, femlod_error *err) {
+    return fl_hierarchy_refine_progress(h, size, fn, payload, NULL, "refine", ops, err);
+}
+
+femlod_status fl_hierarchy_refine_progress(femlod_hierarchy *h, double size, femlod_size_fn fn,
+                                           void *payload, const femlod_progress_options *options,
+                                           const char *what, size_t *ops, femlod_error *err) {
     if (ops) *ops = 0;
     if (!fn && isnan(size)) return fl_error(err, FEMLOD_EINPUT, "size is NaN");
     size_t done = 0;
@@ -576,8 +591,34 @@ femlod_status femlod_hierarchy_refine(femlod_hierarchy *h, double size, femlod_s
      * front order; every split pushes its children. */
     h->work_n = 0;
     for (size_t p = h->front_n; p-- > 0;) h->work[h->work_n++] = h->front[p];
+    /* Progress: the larger of two shares, each a lower bound of the work
+     * done. The starting front's nodes lie at the bottom of the stack,
+     * under the children that splits push, so those still on it are
+     * min(work_n, left): one share is the front walked, 1 - left / front.
+     * The other is the splits done of the most there can be (the internal
+     * nodes on or below the front): a split cascades through its
+     * dependencies, so one early node can carry most of the work. Each is
+     * tested with an integer compare; the division comes every 1%. */
+    size_t front0 = h->work_n, left = front0, smax = 0;
+    fl_progress prog;
+    fl_progress_init(&prog, options ? options->progress : NULL,
+                     options ? options->progress_payload : NULL, 100);
+    if (prog.fn)
+        for (size_t c = 0; c < h->nc; c++) smax += h->state[h->nv + c] != ABOVE;
+    size_t wstep = front0 / 100 + 1, sstep = smax / 100 + 1, wnext = 0, snext = 0;
     h->collect = 1;
     while (h->work_n > 0) {
+        if (h->work_n <= left) left = h->work_n;
+        if (prog.fn && (front0 - left >= wnext || done >= snext)) {
+            wnext = front0 - left + wstep;
+            snext = done + sstep;
+            double w = (double)(front0 - left) / (double)front0;
+            double sp = smax ? (double)done / (double)smax : 0.0;
+            if (fl_progress_fraction(&prog, w > sp ? w : sp)) {
+                st = fl_progress_cancelled(err, what);
+                break;
+            }
+        }
         uint32_t x = h->work[--h->work_n];
         if (h->state[x] != FRONT || !is_internal(h, x)) continue;
         double t;
@@ -587,6 +628,7 @@ femlod_status femlod_hierarchy_refine(femlod_hierarchy *h, double size, femlod_s
     }
     h->collect = 0;
     h->work_n = 0;
+    if (st == FEMLOD_OK) fl_progress_end(&prog);
     if (ops) *ops = done;
     return st;
 }

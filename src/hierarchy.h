@@ -55,6 +55,15 @@ struct femlod_hierarchy {
  * every split pushes its children and every collapse its parent on h->work. */
 FL_INTERNAL size_t fl_hierarchy_force_split(femlod_hierarchy *h, uint32_t target);
 FL_INTERNAL size_t fl_hierarchy_force_collapse(femlod_hierarchy *h, uint32_t target);
+/* femlod_hierarchy_refine with a progress callback (options may be NULL):
+ * done is the share of the starting front whose subtrees were walked; a
+ * cancel fails with FEMLOD_ECANCELLED ("WHAT: cancelled by the progress
+ * callback"), the front valid. */
+FL_INTERNAL femlod_status fl_hierarchy_refine_progress(femlod_hierarchy *h, double size,
+                                                       femlod_size_fn fn, void *payload,
+                                                       const femlod_progress_options *options,
+                                                       const char *what, size_t *ops,
+                                                       femlod_error *err);
 
 /* Sets the front to the given nodes (a cut, closed under vstars) and
  * rebuilds the active faces; FEMLOD_EPARSE with a message when the nodes do

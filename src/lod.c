@@ -115,9 +115,9 @@ static int can_split(const femlod_hierarchy *h, uint32_t x) {
  * that a cascade of dependencies cannot carry the count far past the target
  * (it would change regions that the density order did not choose). */
 static size_t run(femlod_hierarchy *h, fl_heap *heap, const double *r, const double *u,
-                  uint32_t *waiting,
-                  size_t target, int down) {
-    size_t done = 0, nwait = 0;
+                  uint32_t *waiting, size_t target, int down, fl_progress *prog,
+                  int *cancelled) {
+    size_t done = 0, nwait = 0, n0 = h->active_n;
     int forced = 0;
     double sign = down ? -1.0 : 1.0; /* down: smallest r first */
     for (size_t p = 0; p < h->front_n; p++) {
@@ -143,6 +143,12 @@ static size_t run(femlod_hierarchy *h, fl_heap *heap, const double *r, const dou
             continue;
         }
         done += down ? fl_hierarchy_force_collapse(h, x) : fl_hierarchy_force_split(h, x);
+        /* collapses only lower the count, splits only raise it */
+        if (fl_progress_at(prog, down ? n0 - h->active_n : h->active_n - n0)) {
+            *cancelled = 1;
+            h->work_n = 0;
+            break;
+        }
         /* new candidates: the parent of a collapse, the children of a split */
         while (h->work_n > 0) {
             uint32_t q = h->work[--h->work_n];
@@ -164,7 +170,8 @@ static size_t run(femlod_hierarchy *h, fl_heap *heap, const double *r, const dou
     return done;
 }
 
-femlod_status femlod_hierarchy_rescale(femlod_hierarchy *h, size_t target, size_t *ops,
+femlod_status femlod_hierarchy_rescale(femlod_hierarchy *h, size_t target,
+                                       const femlod_progress_options *options, size_t *ops,
                                        femlod_error *err) {
     if (ops) *ops = 0;
     double *r = density_ratios(h), *u = tie_order(h);
@@ -178,9 +185,15 @@ femlod_status femlod_hierarchy_rescale(femlod_hierarchy *h, size_t target, size_
         return fl_error(err, FEMLOD_ENOMEM, "out of memory in rescale of %zu nodes", h->nn);
     }
     size_t done = 0;
+    int cancelled = 0;
+    fl_progress prog;
+    fl_progress_init(&prog, options ? options->progress : NULL,
+                     options ? options->progress_payload : NULL,
+                     h->active_n > target ? h->active_n - target : target - h->active_n);
     h->collect = 1;
     h->work_n = 0;
-    if (h->active_n != target) done = run(h, &heap, r, u, waiting, target, h->active_n > target);
+    if (h->active_n != target)
+        done = run(h, &heap, r, u, waiting, target, h->active_n > target, &prog, &cancelled);
     h->collect = 0;
     h->work_n = 0;
     fl_heap_free(&heap);
@@ -188,6 +201,8 @@ femlod_status femlod_hierarchy_rescale(femlod_hierarchy *h, size_t target, size_
     free(u);
     free(r);
     if (ops) *ops = done;
+    if (cancelled) return fl_progress_cancelled(err, "rescale");
+    fl_progress_end(&prog);
     return FEMLOD_OK;
 }
 
@@ -256,6 +271,7 @@ femlod_status femlod_hierarchy_refine_curvature(femlod_hierarchy *h,
     if (o.map != FEMLOD_KAPPA_LINEAR && o.map != FEMLOD_KAPPA_LOG)
         return fl_error(err, FEMLOD_EINPUT, "unknown kappa map %d", (int)o.map);
     kappa_size ks = {h, 0.0, 0.0, 0.0, 0.0, o.map, o.fn, o.payload};
+    femlod_progress_options po = {o.progress, o.progress_payload};
     if (!o.fn) {
         double fine = o.fine, coarse = o.coarse, percentile = o.percentile;
         if (isnan(fine)) fine = 0.0;
@@ -289,7 +305,8 @@ femlod_status femlod_hierarchy_refine_curvature(femlod_hierarchy *h,
         ks.fine = fine;
         ks.coarse = coarse;
     }
-    return femlod_hierarchy_refine(h, 0.0, kappa_threshold, &ks, ops, err);
+    return fl_hierarchy_refine_progress(h, 0.0, kappa_threshold, &ks, &po, "refine_curvature", ops,
+                                        err);
 }
 
 femlod_status femlod_hierarchy_input_mesh(const femlod_hierarchy *h, femlod_mesh **out,
@@ -434,7 +451,8 @@ femlod_status femlod_hierarchy_region_distance(const femlod_hierarchy *h,
 }
 
 femlod_status femlod_hierarchy_refine_region(femlod_hierarchy *h, const femlod_region *region,
-                                             double size, double grading, size_t *ops,
+                                             double size, double grading,
+                                             const femlod_progress_options *options, size_t *ops,
                                              size_t *inside, femlod_error *err) {
     if (ops) *ops = 0;
     if (inside) *inside = 0;
@@ -450,7 +468,8 @@ femlod_status femlod_hierarchy_refine_region(femlod_hierarchy *h, const femlod_r
         for (size_t x = 0; x < h->nn; x++) *inside += d[x] == 0.0;
     if (st == FEMLOD_OK) {
         region_size rs = {d, size, grading - 1.0};
-        st = femlod_hierarchy_refine(h, 0.0, region_threshold, &rs, ops, err);
+        st = fl_hierarchy_refine_progress(h, 0.0, region_threshold, &rs, options, "refine_region",
+                                          ops, err);
     }
     free(d);
     return st;

@@ -1,6 +1,9 @@
 -- femlod.progress: a progress bar with rate and ETA on standard error, drawn
--- only when standard error is a terminal (femlod._isatty), for the progress
--- option of femlod.simplify and for recipes' own loops.
+-- only when standard error is a terminal (femlod._isatty) and the program
+-- was not run with --quiet (femlod.quiet), for the progress option of
+-- femlod.simplify, m:curvature, m:quality(reference, opts), h:rescale,
+-- h:refine_curvature, h:refine_region, femlod.report and for recipes' own
+-- loops.
 --
 --   local progress = require "femlod.progress"
 --   local bar <close> = progress.bar { label = "simplify" }
@@ -23,10 +26,12 @@ local M = {}
 
 local WIDTH = 24
 
--- Whether standard error is a terminal (false without the module's helper).
+-- Whether to draw: standard error is a terminal (false without the module's
+-- helper) and femlod.quiet (the program's --quiet) is not set.
 function M.enabled()
   local ok, femlod = pcall(require, "femlod")
-  return ok and type(femlod) == "table" and type(femlod._isatty) == "function" and femlod._isatty(2) or false
+  return ok and type(femlod) == "table" and femlod.quiet ~= true and type(femlod._isatty) == "function"
+    and femlod._isatty(2) or false
 end
 
 local Bar = {}

@@ -485,7 +485,7 @@ local function valence_bars(nb)
 end
 
 local REPORT_KEYS = { reference = true, html = true, name = true, reference_name = true, viewer = true,
-  title = true }
+  title = true, progress = true }
 
 local function check_opts(opts)
   if opts == nil then return {} end
@@ -494,8 +494,8 @@ local function check_opts(opts)
   end
   for k in pairs(opts) do
     if not REPORT_KEYS[k] then
-      error(format("bad argument #2 to 'report' (unknown option '%s'; valid: html, name, reference, "
-        .. "reference_name, title, viewer)", tostring(k)), 3)
+      error(format("bad argument #2 to 'report' (unknown option '%s'; valid: html, name, progress, "
+        .. "reference, reference_name, title, viewer)", tostring(k)), 3)
     end
   end
   for _, k in ipairs { "html", "name", "reference_name", "title" } do
@@ -505,6 +505,9 @@ local function check_opts(opts)
   end
   if opts.viewer ~= nil and opts.viewer ~= false and type(opts.viewer) ~= "string" then
     error(format("bad argument #2 to 'report' (viewer: path or false expected, got %s)", type(opts.viewer)), 3)
+  end
+  if opts.progress ~= nil and type(opts.progress) ~= "function" then
+    error(format("bad argument #2 to 'report' (progress: function expected, got %s)", type(opts.progress)), 3)
   end
   local ref = opts.reference
   local mt = type(ref) == "userdata" and getmetatable(ref)
@@ -532,7 +535,8 @@ end
 -- report(mesh [, opts]): the summary of a mesh, and its HTML page when
 -- opts.html is given. opts: reference (a Mesh: deviation and its own row),
 -- name, reference_name, title, html (path), viewer (path of
--- model-viewer.min.js, or false for a page without the 3D view).
+-- model-viewer.min.js, or false for a page without the 3D view), progress
+-- (a function(done) following the deviation from the reference).
 function M.report(mesh, opts)
   local mt = type(mesh) == "userdata" and getmetatable(mesh)
   if not (type(mt) == "table" and mt.__name == "femlod.Mesh") then
@@ -542,7 +546,7 @@ function M.report(mesh, opts)
   opts = check_opts(opts)
   local name = opts.name or "mesh"
   local ref = opts.reference
-  local q = mesh:quality(ref)
+  local q = ref and opts.progress and mesh:quality(ref, { progress = opts.progress }) or mesh:quality(ref)
   local sizes, nb = element_measures(mesh)
   local sbars, sedges = {}, {}
   local nbins = #q.histogram

@@ -36,7 +36,7 @@ typedef struct cli {
     int argc;
     char **argv;
     lua_Integer seed;
-    int quiet, traceback;
+    int quiet, verbose, traceback;
     const char *record; /* --record FILE, or NULL */
     command cmd;
     int script;     /* argv index that becomes arg[0] (lua.c's convention); 0 for -e */
@@ -93,7 +93,9 @@ static void usage_text(FILE *f) {
           "\n"
           "Options:\n"
           "  --seed N         seed math.random with the integer N (default 0: runs repeat)\n"
-          "  --quiet          print nothing but what the command is for\n"
+          "  -q, --quiet      print nothing but what the command is for\n"
+          "  -v, --verbose    also print each stage (load, simplify, build hierarchy,\n"
+          "                   write ...) with its time and key figures on stderr\n"
           "  --traceback      add a Lua stack traceback to error messages\n"
           "  --sandbox        run and -e: no os.execute, io.popen, os.remove ...; read\n"
           "                   only the recipe's folder and --allow folders, write only\n"
@@ -104,7 +106,7 @@ static void usage_text(FILE *f) {
           "  --record FILE    run: also write FILE, a JSON record of the parameters,\n"
           "                   the files read and written (SHA-256) and the meshes saved\n"
           "  -h, --help       print this help and exit\n"
-          "  -v, --version    print the version and exit\n"
+          "  --version        print the version and exit\n"
           "\n"
           "A value is a number when Lua reads it as one (3, -2.5, 1e3, 0x10), true and\n"
           "false are booleans, anything else is a string. In run and -e the module is\n"
@@ -214,12 +216,14 @@ static int parse_args(lua_State *L, cli *c) {
             usage_text(stdout);
             return EXIT_OK;
         }
-        if (strcmp(a, "-v") == 0 || strcmp(a, "--version") == 0) {
+        if (strcmp(a, "--version") == 0) {
             print_version();
             return EXIT_OK;
         }
         if (strcmp(a, "--quiet") == 0 || strcmp(a, "-q") == 0) {
             c->quiet = 1;
+        } else if (strcmp(a, "--verbose") == 0 || strcmp(a, "-v") == 0) {
+            c->verbose = 1;
         } else if (strcmp(a, "--traceback") == 0) {
             c->traceback = 1;
         } else if (strcmp(a, "--record") == 0 || strncmp(a, "--record=", 9) == 0) {
@@ -243,6 +247,7 @@ static int parse_args(lua_State *L, cli *c) {
             if (st >= 0) return st;
         }
     }
+    if (c->quiet && c->verbose) return usage_error("--quiet and --verbose exclude each other");
     if (i >= c->argc) return usage_error("no command given");
 
     const char *w = c->argv[i];
@@ -511,6 +516,31 @@ void fl_cli_load_mesh(lua_State *L, int module, const char *path, const char *fo
     lua_call(L, 2, 1);
 }
 
+/* Pushes a femlod.progress bar labelled label (drawn only when stderr is a
+ * terminal) and returns its index, or pushes nothing and returns 0 under
+ * --quiet. */
+static int push_bar(lua_State *L, const cli *c, const char *label) {
+    if (c->quiet) return 0;
+    lua_getglobal(L, "require");
+    lua_pushliteral(L, "femlod.progress");
+    lua_call(L, 1, 1);
+    lua_getfield(L, -1, "bar");
+    lua_createtable(L, 0, 1);
+    lua_pushstring(L, label);
+    lua_setfield(L, -2, "label");
+    lua_call(L, 1, 1);
+    lua_remove(L, -2);
+    return lua_gettop(L);
+}
+
+/* Clears the bar at index bar (0: none). */
+static void close_bar(lua_State *L, int bar) {
+    if (!bar) return;
+    lua_getfield(L, bar, "close");
+    lua_pushvalue(L, bar);
+    lua_call(L, 1, 0);
+}
+
 /* Calls method name on the object at obj with nargs arguments already pushed. */
 static void call_method(lua_State *L, int obj, const char *name, int nargs, int nres) {
     lua_getfield(L, obj, name);
@@ -542,11 +572,23 @@ static int cmd_info(lua_State *L, const cli *c) {
     int module = lua_gettop(L);
     fl_cli_load_mesh(L, module, path, format);
     int mesh = lua_gettop(L);
-    if (reference)
+    int nargs = 1, bar = 0;
+    if (reference) {
         fl_cli_load_mesh(L, module, reference, NULL);
-    else
+        int ref = lua_gettop(L);
+        bar = push_bar(L, c, "hausdorff");
+        lua_pushvalue(L, ref);
+        if (bar) {
+            lua_createtable(L, 0, 1);
+            lua_getfield(L, bar, "update");
+            lua_setfield(L, -2, "progress");
+            nargs = 2;
+        }
+    } else {
         lua_pushnil(L);
-    call_method(L, mesh, "quality", 1, 1);
+    }
+    call_method(L, mesh, "quality", nargs, 1);
+    close_bar(L, bar);
     int q = lua_gettop(L);
 
     lua_getglobal(L, "require");
@@ -889,29 +931,16 @@ static int cmd_simplify(lua_State *L, const cli *c) {
     }
     lua_pop(L, 1);
 
-    /* A progress bar on stderr when it is a terminal (femlod.progress). */
-    int bar = 0;
-    if (!c->quiet) {
-        lua_getglobal(L, "require");
-        lua_pushliteral(L, "femlod.progress");
-        lua_call(L, 1, 1);
-        lua_getfield(L, -1, "bar");
-        lua_createtable(L, 0, 1);
-        lua_pushliteral(L, "simplify");
-        lua_setfield(L, -2, "label");
-        lua_call(L, 1, 1);
-        lua_remove(L, -2);
-        bar = lua_gettop(L);
+    /* A progress bar on stderr when it is a terminal (femlod.progress); it
+     * covers the building of the hierarchy too. */
+    int bar = push_bar(L, c, "simplify");
+    if (bar) {
         lua_getfield(L, bar, "update");
         lua_setfield(L, opts, "progress");
     }
     lua_pushvalue(L, opts);
     call_method(L, mesh, "simplify", 1, 1);
-    if (bar) {
-        lua_pushvalue(L, bar);
-        call_method(L, lua_gettop(L), "close", 0, 0);
-        lua_pop(L, 1);
-    }
+    close_bar(L, bar);
     int h = lua_gettop(L);
     call_method(L, h, "mesh", 0, 1);
     int result = lua_gettop(L);
@@ -1076,7 +1105,15 @@ static int pmain(lua_State *L) {
     luaL_checkversion(L);
     int st = parse_args(L, &c);
     if (st < 0) {
+        double t0 = fl_lua_clock();
         luaL_openlibs(L);
+        /* femlod.verbose and femlod.quiet, wherever the module opens */
+        lua_pushinteger(L, c.verbose ? 1 : c.quiet ? -1 : 0);
+        lua_setfield(L, LUA_REGISTRYINDEX, FL_VERBOSITY_KEY);
+        if (c.verbose && (c.cmd == CMD_RUN || c.cmd == CMD_EVAL))
+            fl_lua_log(L, "%s %s: %d parameters, seed %lld", c.cmd == CMD_RUN ? "run" : "-e",
+                       c.cmd == CMD_RUN ? c.argv[c.operand] : "(command line)", c.argc - c.pairs,
+                       (long long)c.seed);
         /* Caps alone apply to every command; run and -e start them later,
          * with the sandbox, once the recipe's folder is known. */
         if (c.cmd != CMD_RUN && c.cmd != CMD_EVAL) fl_sandbox_start(fl_sandbox_get(), L, NULL);
@@ -1096,11 +1133,17 @@ static int pmain(lua_State *L) {
         case CMD_REPAIR: st = cmd_repair(L, &c); break;
         case CMD_SWEEP:
         case CMD_REPORT: {
-            fl_sweep_cli sc = {c.argc, c.argv, c.operand, c.seed, c.quiet, c.traceback};
+            fl_sweep_cli sc = {c.argc, c.argv, c.operand, c.seed, c.quiet, c.verbose, c.traceback};
             st = c.cmd == CMD_SWEEP ? fl_sweep_main(L, &sc) : fl_report_main(L, &sc);
             break;
         }
         case CMD_NONE: st = EXIT_USAGE; break;
+        }
+        if (c.verbose && st != EXIT_USAGE) {
+            static const char *const names[] = {"", "run", "-e", "info", "convert", "simplify",
+                                                "lod", "sweep", "report", "repair"};
+            fl_lua_log(L, "%s: %s in %.3f s", names[c.cmd], st == EXIT_OK ? "done" : "failed",
+                       fl_lua_clock() - t0);
         }
     }
     lua_pushinteger(L, st);

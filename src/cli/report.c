@@ -83,11 +83,33 @@ int fl_report_main(lua_State *L, const fl_sweep_cli *c) {
     }
     lua_pushstring(L, base_name(mesh));
     lua_setfield(L, opts, "name");
+    /* The deviation from the reference is the long part: a bar for it on a
+     * terminal (femlod.progress), as simplify has. */
+    int bar = 0;
+    if (ref && !c->quiet) {
+        lua_getglobal(L, "require");
+        lua_pushliteral(L, "femlod.progress");
+        lua_call(L, 1, 1);
+        lua_getfield(L, -1, "bar");
+        lua_createtable(L, 0, 1);
+        lua_pushliteral(L, "hausdorff");
+        lua_setfield(L, -2, "label");
+        lua_call(L, 1, 1);
+        lua_remove(L, -2);
+        bar = lua_gettop(L);
+        lua_getfield(L, bar, "update");
+        lua_setfield(L, opts, "progress");
+    }
     lua_getfield(L, module, "report");
     lua_pushvalue(L, m);
     lua_pushvalue(L, opts);
     lua_call(L, 2, 1);
     int r = lua_gettop(L);
+    if (bar) {
+        lua_getfield(L, bar, "close");
+        lua_pushvalue(L, bar);
+        lua_call(L, 1, 0);
+    }
     if (c->quiet) return 0;
 
     lua_getfield(L, r, "text");

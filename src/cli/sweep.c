@@ -796,6 +796,11 @@ static int run_points(const sweep *s, size_t first, size_t last) {
                 failed = 1;
                 break;
             }
+            if (s->cli->verbose) {
+                fprintf(stderr, "femlod: point %0*zu: started (process %ld)\n", s->width, next,
+                        (long)r[active].pid);
+                fflush(stderr);
+            }
             active++;
             next++;
         }

@@ -13,7 +13,7 @@ typedef struct fl_sweep_cli {
     char **argv;
     int operand;       /* argv index of RECIPE.lua */
     lua_Integer seed;
-    int quiet, traceback;
+    int quiet, verbose, traceback;
 } fl_sweep_cli;
 
 /* Prints "femlod: MESSAGE" and the usage hint on stderr; returns 2 (main.c). */

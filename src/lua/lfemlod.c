@@ -15,9 +15,11 @@
 #include "core.h" /* fl_out: the atomic writer */
 
 #include <errno.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 /* Registry key of the message of the last FEMLOD_ELIMIT failure raised. */
@@ -207,6 +209,44 @@ static int lib_isatty(lua_State *L) {
 }
 
 /* {====================================================================
+ * Verbosity
+ * ===================================================================== */
+
+int fl_lua_verbose(lua_State *L) {
+    if (!lua_checkstack(L, 3)) return 0;
+    int v = 0;
+    if (lua_getfield(L, LUA_REGISTRYINDEX, LUA_LOADED_TABLE) == LUA_TTABLE &&
+        lua_getfield(L, -1, "femlod") == LUA_TTABLE) {
+        lua_pushliteral(L, "verbose");
+        v = lua_rawget(L, -2) != LUA_TNIL && lua_toboolean(L, -1);
+        lua_pop(L, 1);
+    }
+    lua_pop(L, 2);
+    return v;
+}
+
+double fl_lua_clock(void) {
+    struct timespec t;
+    clock_gettime(CLOCK_MONOTONIC, &t);
+    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
+}
+
+void fl_lua_log(lua_State *L, const char *fmt, ...) {
+    (void)L;
+    va_list ap;
+    fflush(stdout); /* keep the order of interleaved lines on a terminal */
+    /* a progress bar may be on the line: clear it (it redraws itself) */
+    fputs(isatty(2) ? "\r\033[Kfemlod: " : "femlod: ", stderr);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    fflush(stderr);
+}
+
+/* }==================================================================== */
+
+/* {====================================================================
  * Embedded helpers
  * ===================================================================== */
 
@@ -288,6 +328,13 @@ int luaopen_femlod(lua_State *L) {
     lua_setfield(L, -2, "_VIEWER_PATHS");
     lua_pushcfunction(L, lib_isatty);
     lua_setfield(L, -2, "_isatty");
+    lua_getfield(L, LUA_REGISTRYINDEX, FL_VERBOSITY_KEY);
+    lua_Integer level = lua_tointeger(L, -1);
+    lua_pop(L, 1);
+    lua_pushboolean(L, level > 0);
+    lua_setfield(L, -2, "verbose");
+    lua_pushboolean(L, level < 0);
+    lua_setfield(L, -2, "quiet");
     lua_pushcfunction(L, lib_write_file);
     lua_setfield(L, -2, "write_file");
     lua_pushcfunction(L, lib_viewer_js);

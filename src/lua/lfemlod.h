@@ -112,6 +112,26 @@ FL_LUA_INTERNAL int fl_lua_raise_limit(lua_State *L, int level, const char *msg)
 #define FL_IO_HOOK "femlod.io_hook"
 FL_LUA_INTERNAL void fl_lua_io_hook(lua_State *L, const char *kind, int path, int object);
 
+/* {====== Verbosity (lfemlod.c). `femlod.verbose` and `femlod.quiet` are
+ * plain fields of the module table: the program sets them from -v and -q
+ * (through the registry, FL_VERBOSITY_KEY, read when the module opens), and
+ * a recipe may change them. With verbose true the functions that read,
+ * write or transform print one line each on standard error, with its time. */
+
+#define FL_VERBOSITY_KEY "femlod.verbosity" /* registry: integer -1 quiet, 0, 1 verbose */
+
+/* Whether package.loaded.femlod.verbose is true (never raises). */
+FL_LUA_INTERNAL int fl_lua_verbose(lua_State *L);
+/* Wall-clock seconds from an arbitrary origin (for durations). */
+FL_LUA_INTERNAL double fl_lua_clock(void);
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+/* Prints "femlod: MESSAGE\n" on standard error (call when fl_lua_verbose). */
+FL_LUA_INTERNAL void fl_lua_log(lua_State *L, const char *fmt, ...);
+
+/* }====== */
+
 /* {====== femlod.Mesh (lmesh.c) */
 
 /* Creates the metatable and adds the module functions load and mesh to the

@@ -19,17 +19,19 @@
  *     vertex, before femlod_simplify runs; the result is an index list in a
  *     Lua-owned buffer, so a raise there (a bad index, an error inside the
  *     function) leaks nothing;
- *   - progress: called from femlod_simplify through lua_pcall; an error
- *     cancels the run, and is raised again once femlod_simplify returned
- *     and its results were freed;
+ *   - progress (fl_opts_progress, lopts.c): called from femlod_simplify,
+ *     femlod_hierarchy_create and the LOD operations through lua_pcall; an
+ *     error cancels the run, and is raised again once the core returned and
+ *     its results were freed;
  *   - the size functions of refine and coarsen: called from the core
  *     through lua_pcall (a trampoline builds the node table under it); a
  *     failure returns NaN, which stops the operation with a valid front,
  *     and is raised once the core returned.
- * While femlod_simplify runs, the input Mesh's box is empty, so a progress
- * function that closes or uses that mesh finds it closed instead of freeing
- * it under the simplifier. While a size function runs, its Hierarchy is
- * busy: using or closing it raises (inside the function).
+ * While femlod_simplify runs and its hierarchy is built, the input Mesh's
+ * box is empty, so a progress function that closes or uses that mesh finds
+ * it closed instead of freeing it under the simplifier. While a size or
+ * progress function of a LOD operation runs, its Hierarchy is busy: using or
+ * closing it raises (inside the function).
  */
 #include "lfemlod.h"
 #include "lopts.h"
@@ -260,45 +262,6 @@ static void read_lock(lua_State *L, const fl_opts *o, femlod_simplify_options *s
  * femlod.simplify
  * ===================================================================== */
 
-enum { PROGRESS_OK, PROGRESS_ERROR, PROGRESS_BAD_RESULT, PROGRESS_LIMIT };
-
-typedef struct progress_call {
-    lua_State *L;
-    int fn;              /* stack index of the function; 0 for none */
-    fl_lua_guard *guard; /* polled for the time cap when not NULL */
-    int failed;          /* PROGRESS_*; on PROGRESS_ERROR the error value is on the top */
-    const char *got;     /* PROGRESS_BAD_RESULT: type name of the result (static) */
-} progress_call;
-
-/* femlod_progress_fn: nothing here may raise. The stack space was reserved
- * before femlod_simplify ran, and every call leaves the stack as it found
- * it, except the failing one, which leaves the error value. */
-static int call_progress(void *payload, double done) {
-    progress_call *pc = (progress_call *)payload;
-    lua_State *L = pc->L;
-    if (pc->failed != PROGRESS_OK) return 1;
-    if (pc->guard && pc->guard->expired(pc->guard, L)) {
-        pc->failed = PROGRESS_LIMIT;
-        return 1;
-    }
-    if (!pc->fn) return 0;
-    lua_pushvalue(L, pc->fn);
-    lua_pushnumber(L, done);
-    if (lua_pcall(L, 1, 1, 0) != LUA_OK) {
-        pc->failed = PROGRESS_ERROR;
-        return 1;
-    }
-    int t = lua_type(L, -1);
-    int stop = lua_toboolean(L, -1);
-    if (t != LUA_TNIL && t != LUA_TBOOLEAN) {
-        pc->failed = PROGRESS_BAD_RESULT;
-        pc->got = lua_typename(L, t);
-        stop = 1;
-    }
-    lua_pop(L, 1);
-    return stop;
-}
-
 static fl_hierarchy *hierarchy_box(lua_State *L) {
     fl_hierarchy *h = (fl_hierarchy *)lua_newuserdatauv(L, sizeof *h, 0);
     memset(h, 0, sizeof *h);
@@ -325,23 +288,12 @@ static int lib_simplify(lua_State *L) {
             luaL_argerror(L, o.arg, msg);
         }
     }
-    progress_call pc = {L, 0, fl_lua_guard_get(L), PROGRESS_OK, NULL};
-    /* Under a time cap the core polls it through the progress callback. */
-    if (pc.guard && pc.guard->time_message) {
-        so.progress = call_progress;
-        so.progress_payload = &pc;
-    } else {
-        pc.guard = NULL;
-    }
-    int t = fl_opts_push(&o, "progress");
-    if (t != LUA_TNIL) {
-        if (t != LUA_TFUNCTION)
-            fl_opts_error(&o, "progress", lua_pushfstring(L, "function expected, got %s",
-                                                          luaL_typename(L, -1)));
-        pc.fn = lua_gettop(L);
-        so.progress = call_progress;
-        so.progress_payload = &pc;
-    }
+    fl_progress_call pc;
+    so.progress = fl_opts_progress(&o, &pc);
+    so.progress_payload = &pc;
+    /* Building the hierarchy is the last 5% of done: about its share of
+     * the time (cover.obj at ratio 0.1). */
+    pc.scale = 0.95;
     read_lock(L, &o, &so);
 
     /* The lock function may have closed the mesh: look it up again. */
@@ -349,33 +301,47 @@ static int lib_simplify(lua_State *L) {
     femlod_mesh *mesh = fl_lmesh_check(L, 1);
     fl_hierarchy *h = hierarchy_box(L);
     int hidx = lua_gettop(L);
-    luaL_checkstack(L, 4, NULL); /* for call_progress, which must not raise */
     femlod_error err;
     femlod_mesh *simplified = NULL;
     femlod_collapse_log *log = NULL;
+    luaL_checkstack(L, 4, NULL); /* for fl_progress_call_fn, which must not raise */
+    double t0 = fl_lua_clock();
     *mbox = NULL; /* busy: see the top of the file */
     femlod_status st = femlod_simplify(&simplified, &log, mesh, &so, &h->result, &err);
-    *mbox = mesh;
+    double t1 = fl_lua_clock();
     /* The hierarchy holds everything the simplified mesh and the log said:
-     * both go as soon as it is built. */
-    if (st == FEMLOD_OK && pc.failed == PROGRESS_OK) {
-        st = femlod_hierarchy_create(&h->hier, mesh, log, &err);
+     * both go as soon as it is built. Its building cannot be stopped by a
+     * true from the function (the simplification, stopped short or not, is
+     * done), only by an error or the time cap; a function that returned true
+ * is not called again. The input stays busy until the hierarchy is built. */
+    if (st == FEMLOD_OK && pc.failed == FL_PROGRESS_OK) {
+        femlod_progress_options po = {so.progress, so.progress_payload};
+        pc.offset = pc.scale;
+        pc.scale = 1.0 - pc.scale;
+        pc.keep_going = 1;
+        st = femlod_hierarchy_create(&h->hier, mesh, log, &po, &err);
         h->log_bytes = femlod_collapse_log_bytes(log);
         h->has_result = 1;
     }
+    *mbox = mesh;
     femlod_mesh_free(simplified);
     femlod_collapse_log_free(log);
-    if (pc.failed != PROGRESS_OK) {
+    if (pc.failed != FL_PROGRESS_OK) {
         hierarchy_release(h);
-        if (pc.failed == PROGRESS_ERROR) return lua_error(L);
-        if (pc.failed == PROGRESS_LIMIT) return fl_lua_raise_limit(L, 1, pc.guard->time_message);
-        return fl_opts_error(&o, "progress",
-                             lua_pushfstring(L, "function returned %s (boolean or nil expected)",
-                                             pc.got));
+        fl_opts_progress_check(&o, &pc, st);
     }
     if (st != FEMLOD_OK) {
         hierarchy_release(h);
         return fl_lua_raise(L, &err);
+    }
+    if (fl_lua_verbose(L)) {
+        const femlod_simplify_result *r = &h->result;
+        fl_lua_log(L, "simplify: %zu -> %zu triangles, %zu collapses, stopped: %s (%.3f s)",
+                   femlod_mesh_triangle_count(mesh), r->triangles, r->collapses,
+                   femlod_stop_reason_name(r->stop_reason), t1 - t0);
+        fl_lua_log(L, "build hierarchy: %zu nodes, %zu bytes (%.3f s)",
+                   femlod_hierarchy_node_count(h->hier), femlod_hierarchy_bytes(h->hier),
+                   fl_lua_clock() - t1);
     }
     lua_settop(L, hidx);
     return 1;
@@ -399,10 +365,15 @@ static int lib_load_hierarchy(lua_State *L) {
     no_more_arguments(L, 2);
     fl_hierarchy *h = hierarchy_box(L);
     femlod_error err;
+    double t0 = fl_lua_clock();
     if (femlod_hierarchy_load(&h->hier, path, &h->result, &err) != FEMLOD_OK) {
         hierarchy_release(h);
         return fl_lua_raise(L, &err);
     }
+    if (fl_lua_verbose(L))
+        fl_lua_log(L, "load %s: %zu nodes, front %zu triangles (%.3f s)", path,
+                   femlod_hierarchy_node_count(h->hier), femlod_hierarchy_front_triangles(h->hier),
+                   fl_lua_clock() - t0);
     h->has_result = !result_is_none(&h->result);
     fl_lua_io_hook(L, "read", 1, -1);
     return 1;
@@ -417,7 +388,7 @@ static int lib_load_hierarchy(lua_State *L) {
 
 fl_hierarchy *fl_lhierarchy_check(lua_State *L, int arg) {
     fl_hierarchy *h = (fl_hierarchy *)luaL_checkudata(L, arg, FL_HIERARCHY_MT);
-    if (h->busy) luaL_error(L, "attempt to use a femlod.Hierarchy inside its own size function");
+    if (h->busy) luaL_error(L, "attempt to use a femlod.Hierarchy inside its own size or progress function");
     if (!h->hier) luaL_error(L, "attempt to use a closed femlod.Hierarchy");
     return h;
 }
@@ -715,7 +686,7 @@ typedef femlod_status (*lod_op)(femlod_hierarchy *, double, femlod_size_fn, void
                                 femlod_error *);
 
 /* h:refine(size | fn) and h:coarsen(size | fn). */
-static int refine_or_coarsen(lua_State *L, lod_op op) {
+static int refine_or_coarsen(lua_State *L, lod_op op, const char *name) {
     fl_hierarchy *h = fl_lhierarchy_check(L, 1);
     int t = lua_type(L, 2);
     double size = 0.0;
@@ -732,6 +703,7 @@ static int refine_or_coarsen(lua_State *L, lod_op op) {
     luaL_checkstack(L, 4, NULL); /* for call_size, which must not raise */
     size_t ops = 0;
     femlod_error err;
+    double t0 = fl_lua_clock();
     h->busy = 1;
     femlod_status st = op(h->hier, size, sc.fn ? call_size : NULL, &sc, &ops, &err);
     h->busy = 0;
@@ -741,20 +713,26 @@ static int refine_or_coarsen(lua_State *L, lod_op op) {
                                                       "(number expected)",
                                                    sc.got, lid(sc.info.id)));
     if (st != FEMLOD_OK) return fl_lua_raise(L, &err);
+    if (fl_lua_verbose(L))
+        fl_lua_log(L, "%s: %zu %s, front %zu triangles (%.3f s)", name, ops,
+                   op == femlod_hierarchy_refine ? "splits" : "collapses",
+                   femlod_hierarchy_front_triangles(h->hier), fl_lua_clock() - t0);
     lua_pushinteger(L, (lua_Integer)ops);
     return 1;
 }
 
-static int hierarchy_refine(lua_State *L) { return refine_or_coarsen(L, femlod_hierarchy_refine); }
+static int hierarchy_refine(lua_State *L) {
+    return refine_or_coarsen(L, femlod_hierarchy_refine, "refine");
+}
 static int hierarchy_coarsen(lua_State *L) {
-    return refine_or_coarsen(L, femlod_hierarchy_coarsen);
+    return refine_or_coarsen(L, femlod_hierarchy_coarsen, "coarsen");
 }
 
 /* h:rescale{ target = N } or h:rescale{ factor = f }: global LOD with the
  * density of the current front kept (paper 5.3.2, femlod_hierarchy_rescale);
  * factor multiplies the front's triangle count. Returns the operations done. */
 static int hierarchy_rescale(lua_State *L) {
-    static const char *const keys[] = {"factor", "target", NULL};
+    static const char *const keys[] = {"factor", "progress", "target", NULL};
     fl_hierarchy *h = fl_lhierarchy_check(L, 1);
     luaL_checktype(L, 2, LUA_TTABLE);
     fl_opts o;
@@ -776,10 +754,20 @@ static int hierarchy_rescale(lua_State *L) {
         double t = floor(factor * (double)femlod_hierarchy_front_triangles(h->hier) + 0.5);
         target = t < 1.0 ? 1 : t > 4294967295.0 ? (lua_Integer)4294967295.0 : (lua_Integer)t;
     }
-    size_t ops = 0;
+    size_t ops = 0, before = femlod_hierarchy_front_triangles(h->hier);
     femlod_error err;
-    if (femlod_hierarchy_rescale(h->hier, (size_t)target, &ops, &err) != FEMLOD_OK)
-        return fl_lua_raise(L, &err);
+    fl_progress_call pc;
+    femlod_progress_options po = {fl_opts_progress(&o, &pc), &pc};
+    double t0 = fl_lua_clock();
+    h->busy = 1; /* the progress function may not use or close the hierarchy */
+    femlod_status st = femlod_hierarchy_rescale(h->hier, (size_t)target, &po, &ops, &err);
+    h->busy = 0;
+    fl_opts_progress_check(&o, &pc, st);
+    if (st != FEMLOD_OK) return fl_lua_raise(L, &err);
+    if (fl_lua_verbose(L))
+        fl_lua_log(L, "rescale: %zu -> %zu triangles (target %zu), %zu operations (%.3f s)", before,
+                   femlod_hierarchy_front_triangles(h->hier), (size_t)target, ops,
+                   fl_lua_clock() - t0);
     lua_pushinteger(L, (lua_Integer)ops);
     return 1;
 }
@@ -837,7 +825,8 @@ static double call_kappa_map(void *payload, double kappa) {
 
 /* Computes the input mesh's kappa (in a Lua-owned buffer, so that a raise
  * leaks nothing) and stores it on the hierarchy. */
-static void set_curvature(lua_State *L, fl_hierarchy *h, double radius) {
+static void set_curvature(lua_State *L, fl_hierarchy *h, double radius, const fl_opts *o,
+                          fl_progress_call *pc, femlod_progress_fn progress) {
     femlod_error err;
     femlod_mesh *in = NULL;
     size_t nv = femlod_hierarchy_input_vertices(h->hier);
@@ -845,16 +834,25 @@ static void set_curvature(lua_State *L, fl_hierarchy *h, double radius) {
     if (femlod_hierarchy_input_mesh(h->hier, &in, &err) != FEMLOD_OK) fl_lua_raise(L, &err);
     femlod_curvature_options co = FEMLOD_CURVATURE_OPTIONS_INIT;
     co.radius = radius;
+    co.progress = progress;
+    co.progress_payload = pc;
+    double t0 = fl_lua_clock();
+    h->busy = 1;
     femlod_status st = femlod_mesh_curvature(in, &co, NULL, NULL, kappa, NULL, NULL, &err);
+    h->busy = 0;
     femlod_mesh_free(in);
+    fl_opts_progress_check(o, pc, st);
     if (st == FEMLOD_OK) st = femlod_hierarchy_set_curvature(h->hier, kappa, &err);
     if (st != FEMLOD_OK) fl_lua_raise(L, &err);
     h->has_curvature = 1;
     lua_pop(L, 1);
+    if (fl_lua_verbose(L))
+        fl_lua_log(L, "curvature: %zu vertices (%.3f s)", nv, fl_lua_clock() - t0);
 }
 
 static int hierarchy_refine_curvature(lua_State *L) {
-    static const char *const keys[] = {"coarse", "fine", "map", "percentile", "radius", NULL};
+    static const char *const keys[] = {"coarse", "fine", "map", "percentile", "progress", "radius",
+                                       NULL};
     fl_hierarchy *h = fl_lhierarchy_check(L, 1);
     fl_opts o;
     fl_opts_open(&o, L, 2, keys);
@@ -900,19 +898,31 @@ static int hierarchy_refine_curvature(lua_State *L) {
     if (kc.fn && !(isnan(fine) && isnan(coarse) && isnan(percentile)))
         return luaL_argerror(L, 2, "a map function replaces fine, coarse and percentile: "
                                    "give one or the other");
+    fl_progress_call pc;
+    femlod_progress_fn progress = fl_opts_progress(&o, &pc);
     int has_radius = fl_opts_push(&o, "radius") != LUA_TNIL;
+    /* When the curvature is computed here it takes the first 90% of done:
+     * about its share of the time (cover.obj, the default radius). */
+    if (has_radius || !h->has_curvature) pc.scale = 0.9;
     if (has_radius) {
         lua_pop(L, 1);
         double radius = (double)fl_opts_number(&o, "radius", 0.0);
         if (!(radius >= 0.0) || !(radius < HUGE_VAL))
             return fl_opts_error(&o, "radius", "must be a finite number >= 0");
-        set_curvature(L, h, radius);
+        set_curvature(L, h, radius, &o, &pc, progress);
     } else if (!h->has_curvature) {
-        set_curvature(L, h, 0.0);
+        set_curvature(L, h, 0.0, &o, &pc, progress);
     }
-    luaL_checkstack(L, 4, NULL); /* for call_kappa_map, which must not raise */
+    if (pc.scale < 1.0) {
+        pc.offset = pc.scale;
+        pc.scale = 1.0 - pc.scale;
+    }
+    co.progress = progress;
+    co.progress_payload = &pc;
+    luaL_checkstack(L, 8, NULL); /* for call_kappa_map and the progress, which must not raise */
     size_t ops = 0;
     femlod_error err;
+    double t0 = fl_lua_clock();
     h->busy = 1;
     co.fine = fine;
     co.coarse = coarse;
@@ -926,7 +936,11 @@ static int hierarchy_refine_curvature(lua_State *L) {
         return fl_opts_error(&o, "map", lua_pushfstring(L, "function returned %s for kappa %f "
                                                            "(number expected)",
                                                         kc.got, (lua_Number)kc.kappa));
+    fl_opts_progress_check(&o, &pc, st);
     if (st != FEMLOD_OK) return fl_lua_raise(L, &err);
+    if (fl_lua_verbose(L))
+        fl_lua_log(L, "refine_curvature: %zu splits, front %zu triangles (%.3f s)", ops,
+                   femlod_hierarchy_front_triangles(h->hier), fl_lua_clock() - t0);
     lua_pushinteger(L, (lua_Integer)ops);
     return 1;
 }
@@ -979,8 +993,8 @@ static void region_keys(lua_State *L, const fl_opts *o, const char *shape, int t
 }
 
 static int hierarchy_refine_region(lua_State *L) {
-    static const char *const keys[] = {"box", "grading", "size", "sphere", "vertices", "where",
-                                       NULL};
+    static const char *const keys[] = {"box",    "grading",  "progress", "size",
+                                       "sphere", "vertices", "where",    NULL};
     static const char *const shapes[] = {"sphere", "box", "vertices", "where"};
     fl_hierarchy *h = fl_lhierarchy_check(L, 1);
     luaL_checktype(L, 2, LUA_TTABLE);
@@ -1091,9 +1105,18 @@ static int hierarchy_refine_region(lua_State *L) {
     }
     size_t ops = 0, inside = 0;
     femlod_error err;
-    if (femlod_hierarchy_refine_region(h->hier, &region, size, grading, &ops, &inside, &err) !=
-        FEMLOD_OK)
-        return fl_lua_raise(L, &err);
+    fl_progress_call pc;
+    femlod_progress_options po = {fl_opts_progress(&o, &pc), &pc};
+    double t0 = fl_lua_clock();
+    h->busy = 1;
+    femlod_status st =
+        femlod_hierarchy_refine_region(h->hier, &region, size, grading, &po, &ops, &inside, &err);
+    h->busy = 0;
+    fl_opts_progress_check(&o, &pc, st);
+    if (st != FEMLOD_OK) return fl_lua_raise(L, &err);
+    if (fl_lua_verbose(L))
+        fl_lua_log(L, "refine_region: %zu nodes inside, %zu splits, front %zu triangles (%.3f s)",
+                   inside, ops, femlod_hierarchy_front_triangles(h->hier), fl_lua_clock() - t0);
     lua_pushinteger(L, (lua_Integer)ops);
     lua_pushinteger(L, (lua_Integer)inside);
     return 2;
@@ -1131,8 +1154,12 @@ static int hierarchy_save(lua_State *L) {
     const char *path = fl_lua_check_path(L, 2, 1);
     no_more_arguments(L, 3);
     femlod_error err;
+    double t0 = fl_lua_clock();
     if (femlod_hierarchy_save(h->hier, path, h->has_result ? &h->result : NULL, &err) != FEMLOD_OK)
         return fl_lua_raise(L, &err);
+    if (fl_lua_verbose(L))
+        fl_lua_log(L, "write %s: %zu nodes (%.3f s)", path, femlod_hierarchy_node_count(h->hier),
+                   fl_lua_clock() - t0);
     fl_lua_io_hook(L, "write", 2, 1);
     return 0;
 }
@@ -1208,7 +1235,7 @@ static int hierarchy_log_bytes(lua_State *L) {
 static int hierarchy_gc(lua_State *L) {
     fl_hierarchy *h = (fl_hierarchy *)luaL_checkudata(L, 1, FL_HIERARCHY_MT);
     if (h->busy)
-        return luaL_error(L, "attempt to close a femlod.Hierarchy inside its own size function");
+        return luaL_error(L, "attempt to close a femlod.Hierarchy inside its own size or progress function");
     hierarchy_release(h);
     return 0;
 }

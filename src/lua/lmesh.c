@@ -76,7 +76,12 @@ static int lib_load(lua_State *L) {
     opts.format = check_format(L, 2);
     femlod_mesh **slot = fl_lmesh_box(L);
     femlod_error err;
+    double t0 = fl_lua_clock();
     if (femlod_mesh_read(slot, path, &opts, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    if (fl_lua_verbose(L))
+        fl_lua_log(L, "load %s: %zu triangles, %zu vertices (%.3f s)", path,
+                   femlod_mesh_triangle_count(*slot), femlod_mesh_vertex_count(*slot),
+                   fl_lua_clock() - t0);
     fl_lmesh_charge(L, slot);
     fl_lua_io_hook(L, "read", 1, -1);
     return 1;
@@ -454,7 +459,11 @@ static int mesh_save(lua_State *L) {
     write_options(L, &opts);
     m = fl_lmesh_check(L, 1); /* a set function may have closed it */
     femlod_error err;
+    double t0 = fl_lua_clock();
     if (femlod_mesh_write(m, path, &opts, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    if (fl_lua_verbose(L))
+        fl_lua_log(L, "write %s: %zu triangles, %zu vertices (%.3f s)", path,
+                   femlod_mesh_triangle_count(m), femlod_mesh_vertex_count(m), fl_lua_clock() - t0);
     fl_lua_io_hook(L, "write", 2, 1);
     return 0;
 }
@@ -490,18 +499,34 @@ static void push_bbox(lua_State *L, const double min[3], const double max[3]) {
     lua_setfield(L, -2, "max");
 }
 
-/* m:quality([reference]): the report as a table whose keys are the C field
- * names (topology flattened in). */
+/* m:quality([reference [, {progress = f}]]): the report as a table whose
+ * keys are the C field names (topology flattened in); progress follows the
+ * Hausdorff distance to the reference. */
 static int mesh_quality(lua_State *L) {
+    static const char *const keys[] = {"progress", NULL};
     const femlod_mesh *m = fl_lmesh_check(L, 1);
     const femlod_mesh *ref = lua_isnoneornil(L, 2) ? NULL : fl_lmesh_check(L, 2);
+    fl_opts o;
+    fl_opts_open(&o, L, 3, keys);
+    luaL_argcheck(L, ref || !o.idx, 3, "options without a reference");
     femlod_quality q;
     femlod_hausdorff_result h;
     femlod_error err;
     /* Both computations before any table: a failure raises with nothing built. */
     if (femlod_mesh_quality(m, &q, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
-    if (ref && femlod_mesh_hausdorff(m, ref, NULL, &h, &err) != FEMLOD_OK)
-        return fl_lua_raise(L, &err);
+    if (ref) {
+        femlod_hausdorff_options ho = FEMLOD_HAUSDORFF_OPTIONS_INIT;
+        fl_progress_call pc;
+        ho.progress = fl_opts_progress(&o, &pc);
+        ho.progress_payload = &pc;
+        double t0 = fl_lua_clock();
+        femlod_status st = femlod_mesh_hausdorff(m, ref, &ho, &h, &err);
+        fl_opts_progress_check(&o, &pc, st);
+        if (st != FEMLOD_OK) return fl_lua_raise(L, &err);
+        if (fl_lua_verbose(L))
+            fl_lua_log(L, "hausdorff: %.6g (%.3g of the diagonal), %zu samples (%.3f s)",
+                       h.distance, h.relative, h.samples, fl_lua_clock() - t0);
+    }
 
     lua_createtable(L, 0, 40);
     set_integer(L, "triangles", q.triangles);
@@ -616,7 +641,11 @@ static int mesh_repair(lua_State *L) {
     femlod_mesh **slot = fl_lmesh_box(L);
     femlod_repair_report r;
     femlod_error err;
+    double t0 = fl_lua_clock();
     if (femlod_mesh_repair(slot, m, &ro, &r, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    if (fl_lua_verbose(L))
+        fl_lua_log(L, "repair: %zu -> %zu triangles, %zu -> %zu vertices (%.3f s)", r.triangles_in,
+                   r.triangles_out, r.vertices_in, r.vertices_out, fl_lua_clock() - t0);
     lua_createtable(L, 0, 12);
     static const struct { const char *key; size_t off; } fields[] = {
         {"vertices_in", offsetof(femlod_repair_report, vertices_in)},
@@ -687,7 +716,7 @@ static int mesh_triangles(lua_State *L) {
  * 1-based, { k1 = {...}, k2 = {...}, kappa = {...}, dir1 = {{x,y,z},...},
  * dir2 = {...} }. The C results go into one Lua-owned buffer, so a raise
  * while the tables are built leaks nothing. */
-static const char *const curvature_keys[] = {"radius", NULL};
+static const char *const curvature_keys[] = {"progress", "radius", NULL};
 
 static void push_numbers(lua_State *L, const double *v, size_t n) {
     lua_createtable(L, size_hint(n), 0);
@@ -716,8 +745,15 @@ static int mesh_curvature(lua_State *L) {
     double *k1 = (double *)lua_newuserdatauv(L, 9 * nv * sizeof(double), 0);
     double *k2 = k1 + nv, *kappa = k2 + nv, *dir1 = kappa + nv, *dir2 = dir1 + 3 * nv;
     femlod_error err;
-    if (femlod_mesh_curvature(m, &opts, k1, k2, kappa, dir1, dir2, &err) != FEMLOD_OK)
-        return fl_lua_raise(L, &err);
+    fl_progress_call pc;
+    opts.progress = fl_opts_progress(&o, &pc);
+    opts.progress_payload = &pc;
+    double t0 = fl_lua_clock();
+    femlod_status st = femlod_mesh_curvature(m, &opts, k1, k2, kappa, dir1, dir2, &err);
+    fl_opts_progress_check(&o, &pc, st);
+    if (st != FEMLOD_OK) return fl_lua_raise(L, &err);
+    if (fl_lua_verbose(L))
+        fl_lua_log(L, "curvature: %zu vertices (%.3f s)", nv, fl_lua_clock() - t0);
     lua_createtable(L, 0, 5);
     push_numbers(L, k1, nv);
     lua_setfield(L, -2, "k1");

@@ -158,3 +158,68 @@ int fl_opts_enum(const fl_opts *o, const char *key, const char *const names[], i
     luaL_pushresult(&b);
     return fl_opts_error(o, key, lua_tostring(o->L, -1));
 }
+
+/* {====== The progress option */
+
+femlod_progress_fn fl_opts_progress(const fl_opts *o, fl_progress_call *pc) {
+    lua_State *L = o->L;
+    memset(pc, 0, sizeof *pc);
+    pc->L = L;
+    pc->scale = 1.0;
+    pc->failed = FL_PROGRESS_OK;
+    pc->guard = fl_lua_guard_get(L);
+    /* Under a time cap the core polls it through the progress callback. */
+    if (pc->guard && !pc->guard->time_message) pc->guard = NULL;
+    int t = fl_opts_push(o, "progress");
+    if (t != LUA_TNIL) {
+        if (t != LUA_TFUNCTION)
+            fl_opts_error(o, "progress",
+                          lua_pushfstring(L, "function expected, got %s", luaL_typename(L, -1)));
+        pc->fn = lua_gettop(L);
+    }
+    luaL_checkstack(L, 4, NULL); /* for fl_progress_call_fn, which must not raise */
+    return pc->fn || pc->guard ? fl_progress_call_fn : NULL;
+}
+
+/* The stack space was reserved by fl_opts_progress, and every call leaves
+ * the stack as it found it, except the failing one, which leaves the error
+ * value. */
+int fl_progress_call_fn(void *payload, double done) {
+    fl_progress_call *pc = (fl_progress_call *)payload;
+    lua_State *L = pc->L;
+    if (pc->failed != FL_PROGRESS_OK) return 1;
+    if (pc->guard && pc->guard->expired(pc->guard, L)) {
+        pc->failed = FL_PROGRESS_LIMIT;
+        return 1;
+    }
+    if (!pc->fn) return 0;
+    if (pc->stopped) return !pc->keep_going;
+    lua_pushvalue(L, pc->fn);
+    lua_pushnumber(L, pc->offset + pc->scale * done);
+    if (lua_pcall(L, 1, 1, 0) != LUA_OK) {
+        pc->failed = FL_PROGRESS_ERROR;
+        return 1;
+    }
+    int t = lua_type(L, -1);
+    pc->stopped = lua_toboolean(L, -1);
+    int stop = pc->stopped && !pc->keep_going;
+    if (t != LUA_TNIL && t != LUA_TBOOLEAN) {
+        pc->failed = FL_PROGRESS_BAD_RESULT;
+        pc->got = lua_typename(L, t);
+        stop = 1;
+    }
+    lua_pop(L, 1);
+    return stop;
+}
+
+void fl_opts_progress_check(const fl_opts *o, fl_progress_call *pc, femlod_status st) {
+    lua_State *L = o->L;
+    if (pc->failed == FL_PROGRESS_ERROR) lua_error(L);
+    if (pc->failed == FL_PROGRESS_LIMIT) fl_lua_raise_limit(L, 1, pc->guard->time_message);
+    if (pc->failed == FL_PROGRESS_BAD_RESULT)
+        fl_opts_error(o, "progress",
+                      lua_pushfstring(L, "function returned %s (boolean or nil expected)", pc->got));
+    if (st == FEMLOD_ECANCELLED && pc->fn) luaL_error(L, "cancelled");
+}
+
+/* }====== */

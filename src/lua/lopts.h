@@ -47,4 +47,37 @@ FL_LUA_INTERNAL int fl_opts_push(const fl_opts *o, const char *key);
 /* Raises an argument error about key: "KEY: MESSAGE". */
 FL_LUA_INTERNAL int fl_opts_error(const fl_opts *o, const char *key, const char *message);
 
+/* {====== The `progress` option: a Lua function called from the core
+ * through lua_pcall (no Lua error may cross the core). Its errors, a result
+ * other than a boolean or nil, and the time cap (--max-time, polled through
+ * the same callback) are recorded and raised once the core returned. */
+
+enum { FL_PROGRESS_OK, FL_PROGRESS_ERROR, FL_PROGRESS_BAD_RESULT, FL_PROGRESS_LIMIT };
+
+typedef struct fl_progress_call {
+    lua_State *L;
+    int fn;              /* stack index of the function; 0 for none */
+    fl_lua_guard *guard; /* polled for the time cap when not NULL */
+    int failed;          /* FL_PROGRESS_*; on FL_PROGRESS_ERROR the error value is on the top */
+    const char *got;     /* FL_PROGRESS_BAD_RESULT: type name of the result (static) */
+    double offset, scale; /* the function sees offset + scale * done */
+    int keep_going;      /* nonzero: a true result stops nothing */
+    int stopped;         /* the function returned true: it is not called again */
+} fl_progress_call;
+
+/* Reads the option `progress` (nil or a function, left on the stack) of o
+ * into pc; returns the callback to give the core, or NULL when neither a
+ * function nor a time cap needs one. Reserves the stack space the callback
+ * needs (it must not raise). */
+FL_LUA_INTERNAL femlod_progress_fn fl_opts_progress(const fl_opts *o, fl_progress_call *pc);
+/* The femlod_progress_fn: nothing in it raises. */
+FL_LUA_INTERNAL int fl_progress_call_fn(void *payload, double done);
+/* After the core returned st: raises what pc recorded (the function's own
+ * error value, the time cap, a bad result), then "cancelled" when the
+ * function stopped the operation (st FEMLOD_ECANCELLED). Returns otherwise. */
+FL_LUA_INTERNAL void fl_opts_progress_check(const fl_opts *o, fl_progress_call *pc,
+                                            femlod_status st);
+
+/* }====== */
+
 #endif

@@ -65,7 +65,7 @@ int main(int argc, char **argv) {
         femlod_hierarchy *h = NULL;
         femlod_mesh *m = NULL;
         t0 = bench_now();
-        if (femlod_hierarchy_create(&h, dense, log, &err) != FEMLOD_OK) die(&err);
+        if (femlod_hierarchy_create(&h, dense, log, NULL, &err) != FEMLOD_OK) die(&err);
         t_build[r] = bench_now() - t0;
         bytes = femlod_hierarchy_bytes(h);
         front_coarse = femlod_hierarchy_front_triangles(h);

@@ -49,6 +49,35 @@ static int check_passed, check_failed;
         }                                                                                  \
     } while (0)
 
+/* A femlod_progress_fn that records what it is given: the calls, whether
+ * done never went back and stayed in [0, 1], the last value; it asks to
+ * stop at call stop_at (0: never). */
+typedef struct check_progress {
+    size_t calls, stop_at;
+    double last;
+    int ordered, in_range;
+} check_progress;
+#define CHECK_PROGRESS_INIT {0, 0, -1.0, 1, 1}
+
+static inline int check_progress_fn(void *payload, double done) {
+    check_progress *p = (check_progress *)payload;
+    p->calls++;
+    if (!(done >= p->last)) p->ordered = 0;
+    if (!(done >= 0.0 && done <= 1.0)) p->in_range = 0;
+    p->last = done;
+    return p->stop_at && p->calls == p->stop_at;
+}
+
+/* A run that finished: called often enough, in order, in range, ending at 1. */
+#define CHECK_PROGRESS_DONE(p, min_calls)                                                  \
+    do {                                                                                   \
+        CHECK((p).calls >= (min_calls));                                                   \
+        CHECK((p).calls <= 102); /* about every 1%, not per element */                     \
+        CHECK((p).ordered);                                                                \
+        CHECK((p).in_range);                                                               \
+        CHECK((p).last == 1.0);                                                            \
+    } while (0)
+
 static inline int check_report(const char *name) {
     printf("%s: %d passed, %d failed\n", name, check_passed, check_failed);
     return check_failed ? 1 : 0;

@@ -666,7 +666,36 @@ static void test_eigen3(void) {
 
 /* }====== */
 
+/* The progress callback: about every 1% of the vertices, ending at 1, the
+ * results the same as without; a cancel fails with FEMLOD_ECANCELLED and
+ * stops calling. */
+static void test_progress(void) {
+    femlod_mesh *m = load_fandisk();
+    size_t nv = femlod_mesh_vertex_count(m);
+    double *a = calloc(2 * nv, sizeof(double)), *b = a + nv;
+    CHECK(a != NULL);
+    femlod_curvature_options o = FEMLOD_CURVATURE_OPTIONS_INIT;
+    CHECK(femlod_mesh_curvature(m, &o, NULL, NULL, a, NULL, NULL, NULL) == FEMLOD_OK);
+    check_progress pr = CHECK_PROGRESS_INIT;
+    o.progress = check_progress_fn;
+    o.progress_payload = &pr;
+    CHECK(femlod_mesh_curvature(m, &o, NULL, NULL, b, NULL, NULL, NULL) == FEMLOD_OK);
+    CHECK_PROGRESS_DONE(pr, 90);
+    CHECK(memcmp(a, b, nv * sizeof(double)) == 0);
+    check_progress stop = CHECK_PROGRESS_INIT;
+    stop.stop_at = 10;
+    o.progress_payload = &stop;
+    femlod_error err;
+    CHECK(femlod_mesh_curvature(m, &o, NULL, NULL, b, NULL, NULL, &err) == FEMLOD_ECANCELLED);
+    CHECK(stop.calls == 10);
+    CHECK(stop.last > 0.05 && stop.last < 0.15);
+    CHECK(strcmp(err.message, "curvature: cancelled by the progress callback") == 0);
+    free(a);
+    femlod_mesh_free(m);
+}
+
 int main(void) {
+    test_progress();
     test_sphere();
     test_jittered_sphere();
     test_hemisphere();

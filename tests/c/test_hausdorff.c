@@ -396,7 +396,35 @@ static void test_shared(void) {
     }
 }
 
+/* The progress callback: about every 1% of the triangles of both sides,
+ * ending at 1, the result the same as without; a cancel fails with
+ * FEMLOD_ECANCELLED, stops calling and leaves *out as it was. */
+static void test_progress(void) {
+    femlod_mesh *a = shape_icosphere(5), *b = shape_icosphere(3);
+    femlod_hausdorff_result want = hausdorff(a, b, 0, 0), got, kept;
+    femlod_hausdorff_options o = FEMLOD_HAUSDORFF_OPTIONS_INIT;
+    check_progress pr = CHECK_PROGRESS_INIT;
+    o.progress = check_progress_fn;
+    o.progress_payload = &pr;
+    CHECK(femlod_mesh_hausdorff(a, b, &o, &got, NULL) == FEMLOD_OK);
+    CHECK_PROGRESS_DONE(pr, 90);
+    CHECK(same_result(&got, &want));
+    check_progress stop = CHECK_PROGRESS_INIT;
+    stop.stop_at = 50;
+    o.progress_payload = &stop;
+    memset(&kept, 0x5A, sizeof kept);
+    got = kept;
+    femlod_error err;
+    CHECK(femlod_mesh_hausdorff(a, b, &o, &got, &err) == FEMLOD_ECANCELLED);
+    CHECK(stop.calls == 50);
+    CHECK(memcmp(&got, &kept, sizeof got) == 0);
+    CHECK(strcmp(err.message, "hausdorff: cancelled by the progress callback") == 0);
+    femlod_mesh_free(a);
+    femlod_mesh_free(b);
+}
+
 int main(void) {
+    test_progress();
     test_self();
     test_translated_plane();
     test_asymmetric();

@@ -113,7 +113,7 @@ static void run(const char *name, size_t target, size_t random_ops, unsigned see
     femlod_error err;
     CHECK(femlod_simplify(&out, &log, in, &o, &r, &err) == FEMLOD_OK);
     femlod_hierarchy *h = NULL;
-    femlod_status s = femlod_hierarchy_create(&h, in, log, &err);
+    femlod_status s = femlod_hierarchy_create(&h, in, log, NULL, &err);
     CHECK(s == FEMLOD_OK);
     if (s != FEMLOD_OK) {
         fprintf(stderr, "%s: %s\n", name, err.message);
@@ -267,7 +267,7 @@ static void test_damaged_files(void) {
     CHECK(femlod_simplify(&out, &log, a, &o, NULL, NULL) == FEMLOD_OK);
     femlod_hierarchy *h = NULL, *g = NULL;
     femlod_error err;
-    CHECK(femlod_hierarchy_create(&h, a, log, &err) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_create(&h, a, log, NULL, &err) == FEMLOD_OK);
     char path[1024], bad[1024];
     const char *tmp = getenv("FEMLOD_TMP");
     snprintf(path, sizeof path, "%s/ico.flh", tmp && *tmp ? tmp : "/tmp");
@@ -330,10 +330,10 @@ static void test_errors(void) {
     CHECK(femlod_simplify(&out, &log, a, &o, NULL, NULL) == FEMLOD_OK);
     femlod_hierarchy *h = NULL;
     femlod_error err;
-    CHECK(femlod_hierarchy_create(&h, b, log, &err) == FEMLOD_EINPUT);
+    CHECK(femlod_hierarchy_create(&h, b, log, NULL, &err) == FEMLOD_EINPUT);
     CHECK(h == NULL);
     CHECK_STR_HAS(err.message, "collapse log is for 162 input vertices, the mesh has 42");
-    CHECK(femlod_hierarchy_create(&h, a, log, &err) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_create(&h, a, log, NULL, &err) == FEMLOD_OK);
     CHECK(femlod_hierarchy_split(h, 0, NULL, &err) == FEMLOD_EINPUT);
     CHECK_STR_HAS(err.message, "node 0 is an input vertex");
     CHECK(femlod_hierarchy_split(h, 1u << 30, NULL, &err) == FEMLOD_EINPUT);
@@ -365,7 +365,7 @@ static femlod_hierarchy *simplified(const femlod_mesh *in, size_t target, femlod
     o.target = target;
     femlod_hierarchy *h = NULL;
     CHECK(femlod_simplify(out, log, in, &o, NULL, NULL) == FEMLOD_OK);
-    CHECK(femlod_hierarchy_create(&h, in, *log, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_create(&h, in, *log, NULL, NULL) == FEMLOD_OK);
     return h;
 }
 
@@ -450,7 +450,7 @@ static void test_region_case(const char *label, femlod_hierarchy *h, const femlo
         was_front[front[p]] = 1;
     }
     size_t before = femlod_hierarchy_front_triangles(h), ops = 0, inside = 0;
-    CHECK(femlod_hierarchy_refine_region(h, r, size, grading, &ops, &inside, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_refine_region(h, r, size, grading, NULL, &ops, &inside, NULL) == FEMLOD_OK);
     CHECK(inside > 0);
     /* reach: where size + (grading - 1) d >= every e_size of the front */
     double reach = isinf(grading) ? 0.0 : (emax - size) / (grading - 1.0);
@@ -497,7 +497,7 @@ static void test_refine_region(const char *name, size_t target, int heavy) {
     femlod_hierarchy *h = NULL;
     femlod_simplify_result res;
     CHECK(femlod_simplify(&out, &log, in, &o, &res, NULL) == FEMLOD_OK);
-    CHECK(femlod_hierarchy_create(&h, in, log, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_create(&h, in, log, NULL, NULL) == FEMLOD_OK);
     femlod_topology top;
     CHECK(femlod_mesh_topology(in, &top, NULL) == FEMLOD_OK);
     femlod_quality q;
@@ -533,22 +533,22 @@ static void test_refine_region(const char *name, size_t target, int heavy) {
     /* errors: nothing changes */
     size_t before = femlod_hierarchy_front_triangles(h), ops = 7;
     femlod_error err;
-    CHECK(femlod_hierarchy_refine_region(h, &r, -1.0, 1.5, &ops, NULL, &err) == FEMLOD_EINPUT);
+    CHECK(femlod_hierarchy_refine_region(h, &r, -1.0, 1.5, NULL, &ops, NULL, &err) == FEMLOD_EINPUT);
     CHECK_STR_HAS(err.message, "size is -1");
     CHECK(ops == 0);
-    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, 0.5, NULL, NULL, &err) == FEMLOD_EINPUT);
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, 0.5, NULL, NULL, NULL, &err) == FEMLOD_EINPUT);
     CHECK_STR_HAS(err.message, "grading is 0.5");
-    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, NAN, NULL, NULL, &err) == FEMLOD_EINPUT);
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, NAN, NULL, NULL, NULL, &err) == FEMLOD_EINPUT);
     r.marks = NULL;
-    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, 1.5, NULL, NULL, &err) == FEMLOD_EINPUT);
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, 1.5, NULL, NULL, NULL, &err) == FEMLOD_EINPUT);
     CHECK_STR_HAS(err.message, "marks are NULL");
     r.kind = FEMLOD_REGION_BOX;
     r.min[1] = r.max[1] + 1.0;
-    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, 1.5, NULL, NULL, &err) == FEMLOD_EINPUT);
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, 1.5, NULL, NULL, NULL, &err) == FEMLOD_EINPUT);
     CHECK_STR_HAS(err.message, "min <= max expected");
     r.kind = FEMLOD_REGION_SPHERE;
     r.radius = NAN;
-    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, 1.5, NULL, NULL, &err) == FEMLOD_EINPUT);
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.1, 1.5, NULL, NULL, NULL, &err) == FEMLOD_EINPUT);
     CHECK_STR_HAS(err.message, "radius is nan");
     CHECK(femlod_hierarchy_front_triangles(h) == before);
     /* a region no vertex reaches: nothing inside, nothing split */
@@ -556,7 +556,7 @@ static void test_refine_region(const char *name, size_t target, int heavy) {
     r.center[0] = q.bbox_max[0] + 10 * diag;
     r.radius = 0.01 * diag;
     size_t inside = 9;
-    CHECK(femlod_hierarchy_refine_region(h, &r, 0.0, INFINITY, &ops, &inside, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.0, INFINITY, NULL, &ops, &inside, NULL) == FEMLOD_OK);
     CHECK(ops == 0 && inside == 0);
     free(marks);
     femlod_hierarchy_free(h);
@@ -736,7 +736,7 @@ static void test_rescale(const char *name, size_t target0, int with_ball, int N,
         remove(path);
         if (!g) continue;
         size_t ops = 0;
-        CHECK(femlod_hierarchy_rescale(g, target, &ops, NULL) == FEMLOD_OK);
+        CHECK(femlod_hierarchy_rescale(g, target, NULL, &ops, NULL) == FEMLOD_OK);
         femlod_mesh *m = front_mesh(g);
         size_t t = femlod_mesh_triangle_count(m);
         region_sizes(m, lo, hi, N, after);
@@ -758,6 +758,191 @@ static void test_rescale(const char *name, size_t target0, int with_ball, int N,
     femlod_mesh_free(in);
 }
 
+/* {====== progress callbacks and cancelling */
+
+/* The same arrays, in the same order. */
+static int identical(const femlod_mesh *a, const femlod_mesh *b) {
+    size_t nv = femlod_mesh_vertex_count(a), nt = femlod_mesh_triangle_count(a);
+    return nv == femlod_mesh_vertex_count(b) && nt == femlod_mesh_triangle_count(b) &&
+           memcmp(femlod_mesh_positions(a), femlod_mesh_positions(b), 3 * nv * sizeof(double)) == 0 &&
+           memcmp(femlod_mesh_triangles(a), femlod_mesh_triangles(b), 3 * nt * sizeof(uint32_t)) == 0;
+}
+
+/* The front of h equals the mesh m exactly. */
+static int front_is(femlod_hierarchy *h, const femlod_mesh *m) {
+    femlod_mesh *f = front_mesh(h);
+    int same = f && identical(f, m);
+    femlod_mesh_free(f);
+    return same;
+}
+
+static femlod_region test_sphere(const femlod_mesh *in) {
+    double lo[3], hi[3];
+    femlod_mesh_bbox(in, lo, hi);
+    femlod_region r;
+    memset(&r, 0, sizeof r);
+    r.kind = FEMLOD_REGION_SPHERE;
+    for (int k = 0; k < 3; k++) r.center[k] = 0.5 * (lo[k] + hi[k]);
+    r.radius = 0.25 * sqrt(pow(hi[0] - lo[0], 2) + pow(hi[1] - lo[1], 2) + pow(hi[2] - lo[2], 2));
+    return r;
+}
+
+/* Every long operation calls its progress callback with done non-decreasing
+ * in [0, 1], about every 1%, ending at 1, and changes nothing by it; a
+ * cancel fails with FEMLOD_ECANCELLED, stops calling, and leaves a valid
+ * hierarchy from which the same call without a callback finishes the work
+ * exactly as one uninterrupted run. */
+static void test_progress(void) {
+    femlod_mesh *in = load("fandisk.obj"), *out = NULL;
+    femlod_collapse_log *log = NULL;
+    femlod_simplify_options so = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    so.target = 1500;
+    CHECK(femlod_simplify(&out, &log, in, &so, NULL, NULL) == FEMLOD_OK);
+    femlod_error err;
+
+    /* create */
+    check_progress pr = CHECK_PROGRESS_INIT;
+    femlod_progress_options po = {check_progress_fn, &pr};
+    femlod_hierarchy *h = NULL, *ref = NULL;
+    CHECK(femlod_hierarchy_create(&ref, in, log, NULL, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_create(&h, in, log, &po, NULL) == FEMLOD_OK);
+    CHECK_PROGRESS_DONE(pr, 50);
+    femlod_mesh *f = front_mesh(h);
+    CHECK(same_mesh(f, out));
+    femlod_mesh_free(f);
+    femlod_hierarchy_free(h);
+    h = (femlod_hierarchy *)&pr; /* must stay as it is */
+    check_progress stop = CHECK_PROGRESS_INIT;
+    stop.stop_at = 5;
+    po.progress_payload = &stop;
+    CHECK(femlod_hierarchy_create(&h, in, log, &po, &err) == FEMLOD_ECANCELLED);
+    CHECK(h == (femlod_hierarchy *)&pr);
+    CHECK(stop.calls == 5);
+    CHECK(strcmp(err.message, "hierarchy: cancelled by the progress callback") == 0);
+    CHECK(err.status == FEMLOD_ECANCELLED);
+
+    /* refine_region: uninterrupted (reference), with progress, cancelled then resumed */
+    femlod_region r = test_sphere(in);
+    size_t ops_ref = 0, in_ref = 0, ops = 0, inside = 0;
+    CHECK(femlod_hierarchy_refine_region(ref, &r, 0.0, 1.5, NULL, &ops_ref, &in_ref, NULL) == FEMLOD_OK);
+    CHECK(ops_ref > 100);
+    femlod_mesh *want = front_mesh(ref);
+    CHECK(femlod_hierarchy_create(&h, in, log, NULL, NULL) == FEMLOD_OK);
+    pr = (check_progress)CHECK_PROGRESS_INIT;
+    po.progress_payload = &pr;
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.0, 1.5, &po, &ops, &inside, NULL) == FEMLOD_OK);
+    CHECK_PROGRESS_DONE(pr, 50);
+    CHECK(ops == ops_ref && inside == in_ref);
+    CHECK(front_is(h, want));
+    femlod_hierarchy_free(h);
+    CHECK(femlod_hierarchy_create(&h, in, log, NULL, NULL) == FEMLOD_OK);
+    stop = (check_progress)CHECK_PROGRESS_INIT;
+    stop.stop_at = 30;
+    po.progress_payload = &stop;
+    ops = 0;
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.0, 1.5, &po, &ops, &inside, &err) ==
+          FEMLOD_ECANCELLED);
+    printf("refine_region cancelled at call 30: %zu of %zu splits\n", ops, ops_ref);
+    CHECK(strcmp(err.message, "refine_region: cancelled by the progress callback") == 0);
+    CHECK(stop.calls == 30);
+    CHECK(ops > 0 && ops < ops_ref);
+    CHECK(femlod_hierarchy_validate(h, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_front_triangles(h) > 1500);
+    CHECK(femlod_hierarchy_front_triangles(h) < femlod_hierarchy_front_triangles(ref));
+    size_t more = 0;
+    CHECK(femlod_hierarchy_refine_region(h, &r, 0.0, 1.5, NULL, &more, NULL, NULL) == FEMLOD_OK);
+    CHECK(ops + more == ops_ref);
+    CHECK(front_is(h, want));
+    femlod_mesh_free(want);
+
+    /* rescale: from the refined front down half way to the simplification's */
+    size_t t0 = femlod_hierarchy_front_triangles(h), target = t0 - (t0 - 1500) / 2;
+    CHECK(femlod_hierarchy_rescale(ref, target, NULL, &ops_ref, NULL) == FEMLOD_OK);
+    want = front_mesh(ref);
+    femlod_hierarchy *g = NULL;
+    CHECK(femlod_hierarchy_create(&g, in, log, NULL, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_refine_region(g, &r, 0.0, 1.5, NULL, NULL, NULL, NULL) == FEMLOD_OK);
+    pr = (check_progress)CHECK_PROGRESS_INIT;
+    po.progress_payload = &pr;
+    CHECK(femlod_hierarchy_rescale(g, target, &po, &ops, NULL) == FEMLOD_OK);
+    CHECK_PROGRESS_DONE(pr, 50);
+    CHECK(ops == ops_ref);
+    CHECK(front_is(g, want));
+    stop = (check_progress)CHECK_PROGRESS_INIT;
+    stop.stop_at = 20;
+    po.progress_payload = &stop;
+    CHECK(femlod_hierarchy_rescale(h, target, &po, &ops, &err) == FEMLOD_ECANCELLED);
+    CHECK(strcmp(err.message, "rescale: cancelled by the progress callback") == 0);
+    CHECK(stop.calls == 20);
+    CHECK(femlod_hierarchy_validate(h, NULL) == FEMLOD_OK);
+    size_t t1 = femlod_hierarchy_front_triangles(h);
+    CHECK(t1 < t0 && t1 > target);
+    CHECK(ops > 0 && ops < ops_ref);
+    femlod_mesh_free(want);
+    femlod_hierarchy_free(g);
+
+    /* refine_curvature */
+    femlod_mesh *im = NULL;
+    CHECK(femlod_hierarchy_input_mesh(h, &im, NULL) == FEMLOD_OK);
+    size_t nv = femlod_mesh_vertex_count(im);
+    double *kappa = calloc(nv, sizeof(double));
+    CHECK(kappa && femlod_mesh_curvature(im, NULL, NULL, NULL, kappa, NULL, NULL, NULL) == FEMLOD_OK);
+    femlod_hierarchy_free(ref);
+    ref = NULL;
+    CHECK(femlod_hierarchy_create(&ref, in, log, NULL, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_create(&g, in, log, NULL, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_set_curvature(ref, kappa, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_set_curvature(g, kappa, NULL) == FEMLOD_OK);
+    femlod_curvature_lod_options co = FEMLOD_CURVATURE_LOD_OPTIONS_INIT;
+    /* coarse given: its default comes from the front, which a cancel changes */
+    size_t nfront = 0;
+    const uint32_t *front = femlod_hierarchy_front(ref, &nfront);
+    co.coarse = 0.0;
+    for (size_t p = 0; p < nfront; p++) {
+        femlod_node_info n;
+        femlod_hierarchy_node(ref, front[p], &n);
+        co.coarse = fmax(co.coarse, n.e_size);
+    }
+    CHECK(femlod_hierarchy_refine_curvature(ref, &co, &ops_ref, NULL) == FEMLOD_OK);
+    CHECK(ops_ref > 100);
+    want = front_mesh(ref);
+    pr = (check_progress)CHECK_PROGRESS_INIT;
+    co.progress = check_progress_fn;
+    co.progress_payload = &pr;
+    CHECK(femlod_hierarchy_refine_curvature(g, &co, &ops, NULL) == FEMLOD_OK);
+    CHECK_PROGRESS_DONE(pr, 50);
+    CHECK(ops == ops_ref);
+    CHECK(front_is(g, want));
+    femlod_hierarchy_free(g);
+    CHECK(femlod_hierarchy_create(&g, in, log, NULL, NULL) == FEMLOD_OK);
+    CHECK(femlod_hierarchy_set_curvature(g, kappa, NULL) == FEMLOD_OK);
+    stop = (check_progress)CHECK_PROGRESS_INIT;
+    stop.stop_at = 40;
+    co.progress_payload = &stop;
+    CHECK(femlod_hierarchy_refine_curvature(g, &co, &ops, &err) == FEMLOD_ECANCELLED);
+    printf("refine_curvature cancelled at call 40: %zu of %zu splits\n", ops, ops_ref);
+    CHECK(strcmp(err.message, "refine_curvature: cancelled by the progress callback") == 0);
+    CHECK(stop.calls == 40);
+    CHECK(femlod_hierarchy_validate(g, NULL) == FEMLOD_OK);
+    CHECK(ops > 0 && ops < ops_ref);
+    co.progress = NULL;
+    CHECK(femlod_hierarchy_refine_curvature(g, &co, &more, NULL) == FEMLOD_OK);
+    CHECK(ops + more == ops_ref);
+    CHECK(front_is(g, want));
+    femlod_mesh_free(want);
+    femlod_hierarchy_free(g);
+
+    free(kappa);
+    femlod_mesh_free(im);
+    femlod_hierarchy_free(h);
+    femlod_hierarchy_free(ref);
+    femlod_collapse_log_free(log);
+    femlod_mesh_free(out);
+    femlod_mesh_free(in);
+}
+
+/* }====== */
+
 /* The checker can fail: two crossing triangles, and a tetrahedron (whose
  * triangles share edges and corners only). */
 static void test_checker(void) {
@@ -776,6 +961,7 @@ int main(void) {
     const char *heavy = getenv("FEMLOD_TEST_HEAVY");
     int is_heavy = !(heavy && heavy[0] == '0');
     test_checker();
+    test_progress();
     test_refine_ball();
     test_curvature_lod();
     test_refine_region("fandisk.obj", 1500, 0);

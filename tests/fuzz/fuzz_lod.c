@@ -93,7 +93,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     femlod_simplify_result res;
     femlod_hierarchy *h = NULL;
     if (femlod_simplify(&out, &log, in, &o, &res, &err) != FEMLOD_OK) goto done;
-    if (femlod_hierarchy_create(&h, in, log, &err) != FEMLOD_OK) abort(); /* its own log */
+    if (femlod_hierarchy_create(&h, in, log, NULL, &err) != FEMLOD_OK) abort(); /* its own log */
     femlod_quality qin;
     if (femlod_mesh_quality(in, &qin, &err) != FEMLOD_OK) goto done;
     double diag = sqrt(pow(qin.bbox_max[0] - qin.bbox_min[0], 2) +
@@ -118,7 +118,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
                 (void)femlod_hierarchy_collapse(h, n.parent, &ops, &err);
             break;
         case 4:
-            (void)femlod_hierarchy_rescale(h, 1 + (size_t)arg * 2, &ops, &err);
+            (void)femlod_hierarchy_rescale(h, 1 + (size_t)arg * 2, NULL, &ops, &err);
             break;
         case 5: {
             femlod_region r;
@@ -133,7 +133,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
             r.radius = diag * (double)(arg % 16) / 32.0;
             (void)femlod_hierarchy_refine_region(h, &r, diag * (double)(arg / 16) / 64.0,
                                                  arg % 3 ? 1.0 + (double)(arg % 5) / 2.0 : INFINITY,
-                                                 &ops, &inside, &err);
+                                                 NULL, &ops, &inside, &err);
             break;
         }
         case 6: {
@@ -143,7 +143,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
             for (size_t v = arg % 7; v < nv; v += 7 + arg % 11) marks[v] = 1;
             r.kind = FEMLOD_REGION_VERTICES;
             r.marks = marks;
-            (void)femlod_hierarchy_refine_region(h, &r, 0.0, 1.5, &ops, &inside, &err);
+            (void)femlod_hierarchy_refine_region(h, &r, 0.0, 1.5, NULL, &ops, &inside, &err);
             free(marks);
             break;
         }

@@ -37,14 +37,14 @@ do
   T.eq(code, 0, "--version exit")
   T.check(out:find("^femlod 0%.1%.0 %(Lua 5%.4%.%d+%)\n$"), "--version text: " .. out)
   T.eq(err, "", "--version: nothing on stderr")
-  T.eq(select(2, run("-v")), out, "-v is --version")
+  T.eq(run("-v"), 2, "-v is --verbose, not --version: no command given")
   code, out, err = run("--help")
   T.eq(code, 0, "--help exit")
   T.eq(err, "", "--help: nothing on stderr")
   for _, want in ipairs { "^usage: femlod %[options%] COMMAND", "\n  run RECIPE%.lua ", "\n  info MESH ",
     "\n  convert IN OUT ", "\n  simplify IN OUT ", "%-%-target N | %-%-ratio R", "%-%-min%-stretch X",
     "%-%-max%-normal%-change DEG", "%-%-keep%-boundary", "%-%-lock I,J,K", "%-%-fast%-above F", "%-%-hierarchy PART%.flh",
-    "\n  lod PART%.flh OUT %-%-size T\n", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-%-quiet ", "\n  %-%-traceback ",
+    "\n  lod PART%.flh OUT %-%-size T\n", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-q, %-%-quiet ", "\n  %-v, %-%-verbose ", "\n  %-%-traceback ",
     "Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded" } do
     T.check(out:find(want), "--help mentions " .. want)
   end
@@ -676,6 +676,80 @@ do
     end
     T.check(near > 0 and near < 0.25 * far, "region.lua: near the hole size " .. near .. ", far " .. far)
   end
+end
+-- }======
+
+-- {====== --verbose: each stage with its time on stderr; stdout unchanged
+do
+  local fan = P.shared .. "/fandisk.obj"
+  local out, flh = path("verbose.obj"), path("verbose.flh")
+  local code, text, err = run("-v", "simplify", fan, out, "--target", "3000", "--hierarchy", flh)
+  T.eq(code, 0, "-v simplify: exit 0: " .. err)
+  local _, quiet_text = run("simplify", fan, out, "--target", "3000", "--hierarchy", flh)
+  local function untimed(t) return (t:gsub(" in %d+%.%d+ s\n", " in T s\n")) end
+  T.eq(untimed(text), untimed(quiet_text), "-v simplify: stdout as without -v")
+  T.check(untimed(text) ~= text, "(the time was taken out)")
+  local stages = {}
+  for line in err:gmatch("[^\n]+") do
+    T.check(line:find("^femlod: "), "-v simplify: every stderr line is femlod's: " .. line)
+    stages[#stages + 1] = line:match("^femlod: (build hierarchy)") or line:match("^femlod: (%a+)")
+  end
+  T.eq(table.concat(stages, ","), "load,simplify,build hierarchy,write,write,simplify",
+    "-v simplify: the stages in order: " .. err)
+  local F = fan:gsub("%p", "%%%0")
+  T.check(err:find("\nfemlod: simplify: 12946 %-> 3000 triangles, %d+ collapses, stopped: target %(%d+%.%d%d%d s%)\n"),
+    "-v simplify: the simplification's figures")
+  T.check(err:find("^femlod: load " .. F .. ": 12946 triangles, 6475 vertices %(%d+%.%d%d%d s%)\n"), "-v: load line")
+  T.check(err:find("\nfemlod: build hierarchy: %d+ nodes, %d+ bytes %(%d+%.%d%d%d s%)\n"), "-v: hierarchy line")
+  T.check(err:find("\nfemlod: write " .. flh:gsub("%p", "%%%0") .. ": %d+ nodes %(%d+%.%d%d%d s%)\n"), "-v: .flh line")
+  T.check(err:find("\nfemlod: write " .. out:gsub("%p", "%%%0") .. ": 3000 triangles, %d+ vertices %(%d+%.%d%d%d s%)\n"),
+    "-v: mesh line")
+  T.check(err:find("\nfemlod: simplify: done in %d+%.%d%d%d s\n$"), "-v: the total last")
+
+  code, text, err = run("--verbose", "lod", flh, path("verbose_lod.obj"), "--size", "0.01")
+  T.eq(code, 0, "--verbose lod: exit 0")
+  T.check(err:find("^femlod: load " .. flh:gsub("%p", "%%%0") .. ": %d+ nodes, front 3000 triangles"), "-v lod: load " .. err)
+  T.check(err:find("\nfemlod: coarsen: 0 collapses, front 3000 triangles"), "-v lod: coarsen")
+  T.check(err:find("\nfemlod: refine: %d+ splits, front %d+ triangles"), "-v lod: refine")
+  T.check(err:find("\nfemlod: lod: done in "), "-v lod: total")
+  for _, c in ipairs {
+    { { "convert", fan, path("verbose.off") }, { "load", "write", "convert: done" } },
+    { { "repair", fan, path("verbose_rep.obj") }, { "load", "repair: 12946 %-> 12946 triangles", "write", "repair: done" } },
+    { { "info", out, "reference=" .. fan }, { "load", "load", "hausdorff: [%d.e-]+ %(", "info: done" } },
+    { { "report", out, "--reference", fan }, { "load", "load", "hausdorff: ", "report: done" } },
+    { { "-e", "femlod.load(" .. ("%q"):format(fan) .. ")" }, { "%-e %(command line%): 0 parameters, seed 0", "load", "%-e: done" } },
+  } do
+    code, text, err = run("-v", table.unpack(c[1]))
+    T.eq(code, 0, "-v " .. c[1][1] .. ": exit 0: " .. err)
+    local at = 1
+    for _, want in ipairs(c[2]) do
+      local s, e = err:find("femlod: " .. want, at)
+      T.check(s ~= nil, "-v " .. c[1][1] .. ": '" .. want .. "' in order in " .. err)
+      at = (e or at) + 1
+    end
+  end
+  -- a recipe sees femlod.verbose and femlod.quiet
+  code, text = run("-v", "-e", "print(femlod.verbose, femlod.quiet)")
+  T.eq(text, "true\tfalse\n", "-v: femlod.verbose")
+  code, text, err = run("-q", "-e", "print(femlod.verbose, femlod.quiet)")
+  T.eq(text, "false\ttrue\n", "-q: femlod.quiet")
+  code, text, err = run("-e", "print(femlod.verbose, femlod.quiet) femlod.load(" .. ("%q"):format(fan) .. ")")
+  T.eq(text, "false\tfalse\n", "neither")
+  T.eq(err, "", "without -v: nothing on stderr")
+  code, text, err = run("-e", "femlod.verbose = true femlod.load(" .. ("%q"):format(fan) .. ")")
+  T.check(err:find("^femlod: load "), "a recipe may turn the lines on: " .. err)
+  -- -q and -v exclude each other: a usage error, nothing run
+  for _, args in ipairs { { "-q", "-v", "info", fan }, { "--verbose", "--quiet", "info", fan }, { "-v", "-q", "-e", "print(1)" } } do
+    code, text, err = run(table.unpack(args))
+    T.eq(code, 2, table.concat(args, " ") .. ": exit 2")
+    T.eq(text, "", table.concat(args, " ") .. ": nothing on stdout")
+    T.eq(err:match("^[^\n]*"), "femlod: --quiet and --verbose exclude each other", table.concat(args, " ") .. ": message")
+  end
+  os.remove(out)
+  os.remove(flh)
+  os.remove(path("verbose_lod.obj"))
+  os.remove(path("verbose.off"))
+  os.remove(path("verbose_rep.obj"))
 end
 -- }======
 

@@ -530,9 +530,9 @@ do
   T.eq(triangle_set(h:mesh()), input_set, "refine(0) still gives the input after a failed refine")
   h:coarsen(huge)
   -- The hierarchy is busy while its size function runs: no use, no close.
-  T.errmsg("code:2: attempt to use a femlod.Hierarchy inside its own size function",
+  T.errmsg("code:2: attempt to use a femlod.Hierarchy inside its own size or progress function",
     "h:refine(function()\n  return h:counts()\nend)", env)
-  T.errmsg("code:2: attempt to close a femlod.Hierarchy inside its own size function",
+  T.errmsg("code:2: attempt to close a femlod.Hierarchy inside its own size or progress function",
     "h:refine(function()\n  h:close()\nend)", env)
   T.eq(h:counts().triangles, 2000, "usable after those errors")
   T.eq(tostring(h), string.format("femlod.Hierarchy (%d nodes, 2000 triangles on the front)", N),
@@ -787,7 +787,7 @@ do
   T.errmsg("code:1: bad argument #1 to 'rescale' (give exactly one of target and factor)",
     "h:rescale{ target = 3, factor = 2 }", env)
   T.errmsg("code:1: bad argument #1 to 'rescale' (give exactly one of target and factor)", "h:rescale{}", env)
-  T.errmsg("code:1: bad argument #1 to 'rescale' (unknown key 'targt'; valid keys: factor, target)",
+  T.errmsg("code:1: bad argument #1 to 'rescale' (unknown key 'targt'; valid keys: factor, progress, target)",
     "h:rescale{ targt = 3 }", env)
   T.errmsg("code:1: bad argument #1 to 'rescale' (factor: must be a positive finite number)",
     "h:rescale{ factor = -2 }", env)
@@ -877,7 +877,7 @@ do
   T.errmsg(pre .. "where: function returned number for node 1 (boolean or nil expected))",
     "h:refine_region{ where = function() return 1 end, size = 1 }", env)
   T.errmsg("code:1: boom", "h:refine_region{ where = function() error('boom') end, size = 1 }", env)
-  T.errmsg("code:1: attempt to use a femlod.Hierarchy inside its own size function",
+  T.errmsg("code:1: attempt to use a femlod.Hierarchy inside its own size or progress function",
     "h:refine_region{ where = function() h:counts() end, size = 1 }", env)
   T.eq(h:validate(), true, "still valid after the errors")
 end
@@ -971,7 +971,7 @@ do
   T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: function returned string for kappa 0.0 "
     .. "(number expected))", "h:refine_curvature { map = function(k) return 'x' end }", env)
   T.errmsg("code:1: bad argument #1 to 'refine_curvature' (unknown key 'fien'; valid keys: coarse, fine, "
-    .. "map, percentile, radius)", "h:refine_curvature { fien = 1 }", env)
+    .. "map, percentile, progress, radius)", "h:refine_curvature { fien = 1 }", env)
   T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: 'linear', 'log' or function expected, got 'cubic')",
     "h:refine_curvature { map = 'cubic' }", env)
   T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: 'linear', 'log' or function expected, got number)",

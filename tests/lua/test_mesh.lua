@@ -297,7 +297,7 @@ do
     "m:curvature { radius = 0/0 }", env)
   T.errmsg("code:1: curvature: radius must be a finite number >= 0 (got inf)",
     "m:curvature { radius = math.huge }", env)
-  T.errmsg("code:1: bad argument #1 to 'curvature' (unknown key 'raduis'; valid keys: radius)",
+  T.errmsg("code:1: bad argument #1 to 'curvature' (unknown key 'raduis'; valid keys: progress, radius)",
     "m:curvature { raduis = 1 }", env)
   T.errmsg("code:1: bad argument #1 to 'curvature' (radius: number expected, got string)",
     "m:curvature { radius = 'big' }", env)

@@ -88,4 +88,140 @@ do
   os.remove(out_mesh)
 end
 
+-- {====== the progress option of the long operations: called about every
+-- 1%, non-decreasing in [0, 1], ending at 1; it changes nothing; true
+-- cancels with the error "cancelled" and leaves the hierarchy valid; an
+-- error in it comes through; another result type is an argument error.
+local function recorder(stop_at)
+  local r = { calls = 0, ordered = true, last = -1 }
+  r.fn = function(d)
+    r.calls = r.calls + 1
+    r.ordered = r.ordered and type(d) == "number" and d >= r.last and d <= 1
+    r.last = d
+    return stop_at ~= nil and r.calls == stop_at or nil
+  end
+  return r
+end
+local function finished(r, what)
+  T.check(r.calls >= 20 and r.calls <= 205, what .. ": calls about every 1%: " .. r.calls)
+  T.check(r.ordered, what .. ": non-decreasing in [0, 1]")
+  T.eq(r.last, 1, what .. ": ends at 1")
+end
+local function serial(m)
+  local t = {}
+  for _, p in ipairs(m:positions()) do t[#t + 1] = ("%.17g %.17g %.17g"):format(p[1], p[2], p[3]) end
+  for _, f in ipairs(m:triangles()) do t[#t + 1] = table.concat(f, " ") end
+  return table.concat(t, "\n")
+end
+local function cancelled(f, what)
+  local ok, e = pcall(f)
+  T.check(not ok and tostring(e):find("^[^:]*test_progress%.lua:%d+: cancelled$") ~= nil,
+    what .. ": true cancels with 'cancelled' at the caller's line: " .. tostring(e))
+end
+
+do
+  local m <close> = femlod.load(P.shared .. "/fandisk.obj")
+  local b = m:bbox()
+  local c, d = {}, 0
+  for k = 1, 3 do c[k] = (b.min[k] + b.max[k]) / 2; d = d + (b.max[k] - b.min[k]) ^ 2 end
+  local sphere = { center = c, radius = math.sqrt(d) / 4 }
+
+  -- simplify: its bar covers the building of the hierarchy, up to 1
+  local r = recorder()
+  local h <close> = m:simplify { target = 1500, progress = r.fn }
+  finished(r, "simplify")
+
+  -- curvature
+  r = recorder()
+  local k1 = m:curvature { progress = r.fn }
+  local k0 = m:curvature()
+  finished(r, "curvature")
+  T.eq(table.concat(k1.kappa, " "), table.concat(k0.kappa, " "), "curvature: the same with progress")
+  cancelled(function() return m:curvature { progress = recorder(5).fn } end, "curvature")
+
+  -- refine_region, refine_curvature and rescale, each on a fresh hierarchy
+  -- against the same call without progress
+  local ops = {
+    { "refine_region", function(x, p) return x:refine_region { sphere = sphere, size = 0, progress = p } end, 10 },
+    -- the curvature is the first 90% (about 100 calls): a cancel at 120 comes in the refinement
+    { "refine_curvature", function(x, p) return x:refine_curvature { progress = p } end, 120 },
+    { "rescale", function(x, p) return x:rescale { factor = 3, progress = p } end, 10 },
+  }
+  for _, op in ipairs(ops) do
+    local name, call = op[1], op[2]
+    local a <close> = m:simplify { target = 1500 }
+    local g <close> = m:simplify { target = 1500 }
+    r = recorder()
+    T.eq(call(a, r.fn), call(g, nil), name .. ": the same operations with progress")
+    finished(r, name)
+    T.eq(serial(a:mesh()), serial(g:mesh()), name .. ": the same front with progress")
+    local x <close> = m:simplify { target = 1500 }
+    cancelled(function() return call(x, recorder(op[3]).fn) end, name)
+    T.eq(x:validate(), true, name .. ": valid after a cancel")
+    local n = x:mesh():counts().triangles
+    T.check(n > 1500 and n < a:mesh():counts().triangles, name .. ": cancelled part way: " .. n)
+    local boom = setmetatable({}, { __tostring = function() return "boom" end })
+    local ok, e = pcall(call, x, function() error(boom) end)
+    T.check(not ok and e == boom, name .. ": the function's error value comes through")
+    T.checkerr("progress: function returned number %(boolean or nil expected%)", call, x, function() return 1 end)
+    T.checkerr("progress: function expected, got string", call, x, "yes")
+    T.eq(x:validate(), true, name .. ": valid after the errors")
+    ok, e = pcall(call, x, function() return x:counts() end)
+    T.check(not ok and e:find("attempt to use a femlod.Hierarchy inside its own size or progress function$"),
+      name .. ": the hierarchy is busy inside its progress function: " .. tostring(e))
+    T.eq(x:validate(), true, name .. ": usable again after")
+  end
+
+  -- the deviation of m:quality(reference) and femlod.report
+  local s <close> = h:mesh()
+  r = recorder()
+  local q1 = s:quality(m, { progress = r.fn })
+  finished(r, "hausdorff")
+  T.eq(q1.hausdorff, s:quality(m).hausdorff, "hausdorff: the same with progress")
+  cancelled(function() return s:quality(m, { progress = recorder(3).fn }) end, "hausdorff")
+  T.checkerr("options without a reference", s.quality, s, nil, { progress = print })
+  T.checkerr("unknown key 'progres'", s.quality, s, m, { progres = print })
+  r = recorder()
+  local rep = femlod.report(s, { reference = m, progress = r.fn })
+  finished(r, "report")
+  T.eq(rep.hausdorff or q1.hausdorff, q1.hausdorff, "report: the same deviation")
+  T.checkerr("progress: function expected, got number", femlod.report, s, { reference = m, progress = 1 })
+end
+-- }======
+
+-- {====== bars in the program: the deviation of report and info on a
+-- terminal, none in a pipe or with --quiet; femlod.quiet turns femlod.progress off
+do
+  local fan = P.shared .. "/fandisk.obj"
+  local small = P.tmp .. "/progress_small.obj"
+  local m <close> = femlod.load(fan)
+  local h <close> = m:simplify { target = 2000 }
+  h:mesh():save(small)
+  for _, args in ipairs { { "report", small, "--reference", fan }, { "info", small, "reference=" .. fan } } do
+    local line = quote(P.femlod) .. " " .. table.concat({ quote(args[1]), quote(args[2]), quote(args[3]), args[4] and quote(args[4]) or "" }, " ")
+    local p = io.popen("script -qec " .. quote(line) .. " /dev/null </dev/null")
+    local tty = p:read("a")
+    T.check(p:close(), args[1] .. " under a terminal")
+    T.check(tty:find("\27%[Khausdorff %[#+%.*%] +%d+%%"), args[1] .. ": a bar on the terminal")
+    T.check(tty:find("\r\27%[K[%w(]"), args[1] .. ": cleared before the report")
+    p = io.popen(line .. " 2>&1 </dev/null")
+    local piped = p:read("a")
+    p:close()
+    T.check(not piped:find("hausdorff %[") and not piped:find("\27"), args[1] .. ": no bar in a pipe")
+    p = io.popen("script -qec " .. quote(quote(P.femlod) .. " -q " .. line:sub(#quote(P.femlod) + 2)) .. " /dev/null </dev/null")
+    local q = p:read("a")
+    p:close()
+    T.check(not q:find("hausdorff %["), args[1] .. " --quiet: no bar")
+  end
+  local code = "io.write(tostring(require('femlod.progress').enabled()))"
+  local p = io.popen("script -qec " .. quote(quote(P.femlod) .. " -e " .. quote(code)) .. " /dev/null </dev/null")
+  T.eq(p:read("a"), "true", "a terminal: femlod.progress draws")
+  p:close()
+  p = io.popen("script -qec " .. quote(quote(P.femlod) .. " -q -e " .. quote(code)) .. " /dev/null </dev/null")
+  T.eq(p:read("a"), "false", "a terminal with --quiet: femlod.progress does not draw")
+  p:close()
+  os.remove(small)
+end
+-- }======
+
 T.summary("test_progress")

@@ -161,7 +161,7 @@ T.checkerr("test_report%.lua:%d+: bad argument #1 to 'report' %(femlod.Mesh expe
   function() femlod.report() end)
 T.checkerr("bad argument #1 to 'report' %(femlod.Mesh expected, got femlod.Hierarchy%)", femlod.report, h)
 T.checkerr("test_report%.lua:%d+: bad argument #2 to 'report' %(unknown option 'htm'; valid: html, name, "
-  .. "reference, reference_name, title, viewer%)", function() femlod.report(mesh, { htm = "x" }) end)
+  .. "progress, reference, reference_name, title, viewer%)", function() femlod.report(mesh, { htm = "x" }) end)
 T.checkerr("bad argument #2 to 'report' %(table expected, got string%)", femlod.report, mesh, "x.html")
 T.checkerr("bad argument #2 to 'report' %(reference: femlod.Mesh expected, got table%)", femlod.report, mesh,
   { reference = {} })

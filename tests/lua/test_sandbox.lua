@@ -319,6 +319,9 @@ local function long_simplify(what, body, line)
 end
 long_simplify("a long simplify", "local h = m:simplify { target = 4 }\n", 3)
 long_simplify("a long simplify inside pcall", "while true do pcall(m.simplify, m, { target = 4 }) end\n", 3)
+-- The other long operations poll the cap the same way: the curvature of
+-- bunny with a wide ball (about 2 s of CPU here) stops at its own line.
+long_simplify("a long curvature", "local k = m:curvature { radius = 0.05 }\n", 3)
 timed("both caps: memory errors caught forever", "while true do\n  pcall(function() local t = {} while true do t[#t + 1] = ('x'):rep(1e6) end end)\nend\n", 2,
   { "--max-memory", "100M" })
 do -- caps alone, with -e
