@@ -86,36 +86,12 @@ int main(int argc, char **argv) {
     for (size_t i = 0; i < 3 * nt; i++) idx[i] = tri[i];
 
     const size_t targets[2] = {50000, 12000};
+    /* femlod in its default exact order and with fast passes above twice
+     * the target (options.fast_above, docs/simplify.md "Fast passes") */
+    const double modes[2] = {0.0, 2.0};
+    const char *const names[2] = {"femlod exact  ", "femlod fast 2 "};
     for (int k = 0; k < 2; k++) {
-        double tf[MAXRUNS], tm[MAXRUNS], cf[MAXRUNS], cm[MAXRUNS];
-        femlod_mesh *out = NULL;
-        femlod_simplify_result res;
-        int same = 1;
-        for (int r = 0; r < runs; r++) {
-            femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
-            o.target = targets[k];
-            o.tolerance = 0.15;
-            o.min_stretch = 0.2;
-            o.max_size = 15.0;
-            o.max_valence = 12;
-            femlod_mesh *x = NULL;
-            double t0 = now(), c0 = cpu_now();
-            if (femlod_simplify(&x, NULL, m, &o, &res, &err) != FEMLOD_OK) {
-                fprintf(stderr, "bench_simplify: %s\n", err.message);
-                return 1;
-            }
-            tf[r] = now() - t0;
-            cf[r] = cpu_now() - c0;
-            if (out) {
-                same &= femlod_mesh_triangle_count(x) == femlod_mesh_triangle_count(out) &&
-                        memcmp(femlod_mesh_positions(x), femlod_mesh_positions(out),
-                               3 * femlod_mesh_vertex_count(x) * sizeof(double)) == 0;
-                femlod_mesh_free(x);
-            } else {
-                out = x;
-            }
-        }
-        double memf = peak_mb();
+        double tm[MAXRUNS], cm[MAXRUNS];
         size_t mo_n = 0;
         float mo_err = 0;
         for (int r = 0; r < runs; r++) {
@@ -127,23 +103,59 @@ int main(int argc, char **argv) {
         }
         femlod_mesh *mo = NULL;
         femlod_mesh_create(&mo, pos, nv, dst, mo_n / 3, NULL);
-        femlod_quality qf, qm;
-        femlod_mesh_quality(out, &qf, NULL);
+        femlod_quality qm;
         femlod_mesh_quality(mo, &qm, NULL);
-        double a = median(tf, runs), b = median(tm, runs), ac = median(cf, runs), bc = median(cm, runs);
+        double b = median(tm, runs), bc = median(cm, runs);
         printf("\ntarget %zu (median of %d runs)\n", targets[k], runs);
-        printf("  femlod        %7zu triangles (%s)  %8.3f s (cpu %.3f s)  stretch min %.3f avg %.3f  size max %.2f  "
-               "valence max %u  closed %d  repeatable %s\n",
-               femlod_mesh_triangle_count(out), femlod_stop_reason_name(res.stop_reason), a, ac, qf.stretch_min,
-               qf.stretch_avg, qf.size_max, (unsigned)qf.valence_max, qf.topology.closed, same ? "yes" : "NO");
         printf("  meshoptimizer %7zu triangles            %8.3f s (cpu %.3f s)  stretch min %.3f avg %.3f  size max %.2f  "
                "valence max %u  closed %d\n",
                mo_n / 3, b, bc, qm.stretch_min, qm.stretch_avg, qm.size_max, (unsigned)qm.valence_max,
                qm.topology.closed);
-        printf("  ratio femlod / meshoptimizer: %.1fx (cpu %.1fx)\n", b > 0 ? a / b : 0.0, bc > 0 ? ac / bc : 0.0);
-        printf("  femlod peak memory %.0f MB, %.0f bytes per input triangle above the loaded input\n", memf,
-               (memf - mem0) * 1048576.0 / (double)nt);
-        femlod_mesh_free(out);
+        for (int mode = 0; mode < 2; mode++) {
+            double tf[MAXRUNS], cf[MAXRUNS];
+            femlod_mesh *out = NULL;
+            femlod_simplify_result res;
+            int same = 1;
+            for (int r = 0; r < runs; r++) {
+                femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+                o.target = targets[k];
+                o.tolerance = 0.15;
+                o.min_stretch = 0.2;
+                o.max_size = 15.0;
+                o.max_valence = 12;
+                o.fast_above = modes[mode];
+                femlod_mesh *x = NULL;
+                double t0 = now(), c0 = cpu_now();
+                if (femlod_simplify(&x, NULL, m, &o, &res, &err) != FEMLOD_OK) {
+                    fprintf(stderr, "bench_simplify: %s\n", err.message);
+                    return 1;
+                }
+                tf[r] = now() - t0;
+                cf[r] = cpu_now() - c0;
+                if (out) {
+                    same &= femlod_mesh_triangle_count(x) == femlod_mesh_triangle_count(out) &&
+                            memcmp(femlod_mesh_positions(x), femlod_mesh_positions(out),
+                                   3 * femlod_mesh_vertex_count(x) * sizeof(double)) == 0;
+                    femlod_mesh_free(x);
+                } else {
+                    out = x;
+                }
+            }
+            double memf = peak_mb();
+            femlod_quality qf;
+            femlod_mesh_quality(out, &qf, NULL);
+            double a = median(tf, runs), ac = median(cf, runs);
+            printf("  %s%7zu triangles (%s)  %8.3f s (cpu %.3f s)  stretch min %.3f avg %.3f  size max %.2f  "
+                   "valence max %u  closed %d  repeatable %s\n",
+                   names[mode], femlod_mesh_triangle_count(out), femlod_stop_reason_name(res.stop_reason), a, ac,
+                   qf.stretch_min, qf.stretch_avg, qf.size_max, (unsigned)qf.valence_max, qf.topology.closed,
+                   same ? "yes" : "NO");
+            printf("    ratio to meshoptimizer: %.1fx (cpu %.1fx); %zu of %zu collapses in fast passes; "
+                   "peak memory so far %.0f MB, %.0f bytes per input triangle above the loaded input\n",
+                   b > 0 ? a / b : 0.0, bc > 0 ? ac / bc : 0.0, res.fast_collapses, res.collapses, memf,
+                   (memf - mem0) * 1048576.0 / (double)nt);
+            femlod_mesh_free(out);
+        }
         femlod_mesh_free(mo);
     }
     free(fpos);
