@@ -1,7 +1,8 @@
 /* fuzz_lod.c - libFuzzer target for simplification and level of detail:
  * the input bytes choose a small generated mesh (closed, open, non-manifold
- * or degenerate), perturb its vertices, choose the thresholds, simplify,
- * build the vertex hierarchy and run a sequence of LOD operations (refine,
+ * or degenerate), perturb its vertices, choose the thresholds and the
+ * order (exact or fast passes), simplify, build the vertex hierarchy and
+ * run a sequence of LOD operations (refine,
  * coarsen, split, collapse, rescale, region and curvature refinement).
  * Besides crashes, sanitizer reports, leaks and hangs, a finding is a
  * broken promise: after every operation the hierarchy must validate, and
@@ -87,7 +88,9 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     o.max_size = z % 4 == 0 ? FEMLOD_SIMPLIFY_OFF : 0.2 + (double)z / 64.0;
     unsigned va = next(&b);
     o.max_valence = va % 4 == 0 ? -1 : (int)(4 + va % 12);
-    o.keep_boundary = (int)(next(&b) & 1u);
+    unsigned kb = next(&b);
+    o.keep_boundary = (int)(kb & 1u);
+    o.fast_above = kb & 2u ? 1.0 + (double)((kb >> 2) % 4) : 0.0; /* fast passes (docs/simplify.md) */
     femlod_mesh *out = NULL;
     femlod_collapse_log *log = NULL;
     femlod_simplify_result res;
