@@ -170,6 +170,7 @@ typedef struct fl_hierarchy {
     size_t log_bytes;              /* the collapse log it was built from; 0 when loaded */
     int busy;                      /* a size function of refine/coarsen is running */
     int has_curvature;             /* femlod_hierarchy_set_curvature was called */
+    double charged;                /* bytes charged to the memory cap, refunded by the release */
 } fl_hierarchy;
 
 /* Creates the metatable, adds the module functions simplify and

@@ -269,10 +269,27 @@ static fl_hierarchy *hierarchy_box(lua_State *L) {
     return h;
 }
 
-static void hierarchy_release(fl_hierarchy *h) {
+/* Frees the hierarchy and refunds its charge (docs/design.md "Caps"). */
+static void hierarchy_release(lua_State *L, fl_hierarchy *h) {
+    double bytes = h->charged;
     femlod_hierarchy_free(h->hier);
     memset(h, 0, sizeof *h);
+    fl_lua_guard *g = bytes > 0 ? fl_lua_guard_get(L) : NULL;
+    if (g) g->charge(g, -bytes);
 }
+
+/* Charges a new hierarchy's memory to the cap (raising past it; the box's
+ * release refunds the charge either way). */
+static void hierarchy_charge(lua_State *L, fl_hierarchy *h) {
+    h->charged = (double)femlod_hierarchy_bytes(h->hier);
+    fl_lua_charge(L, h->charged);
+}
+
+/* What a simplification of nt triangles holds at its peak besides its input,
+ * for the memory cap to refuse it before it starts: measured 301 bytes per
+ * input triangle of work memory (tests/bench, docs/simplify.md) and about 200
+ * for the hierarchy built from its log; rounded up. */
+#define SIMPLIFY_BYTES_PER_TRIANGLE 600.0
 
 /* femlod.simplify(mesh [, opts]) and mesh:simplify([opts]). */
 static int lib_simplify(lua_State *L) {
@@ -305,6 +322,8 @@ static int lib_simplify(lua_State *L) {
     femlod_mesh *simplified = NULL;
     femlod_collapse_log *log = NULL;
     luaL_checkstack(L, 4, NULL); /* for fl_progress_call_fn, which must not raise */
+    /* under --max-memory: refused before the work memory is taken */
+    fl_lua_reserve(L, SIMPLIFY_BYTES_PER_TRIANGLE * (double)femlod_mesh_triangle_count(mesh));
     double t0 = fl_lua_clock();
     *mbox = NULL; /* busy: see the top of the file */
     femlod_status st = femlod_simplify(&simplified, &log, mesh, &so, &h->result, &err);
@@ -327,13 +346,14 @@ static int lib_simplify(lua_State *L) {
     femlod_mesh_free(simplified);
     femlod_collapse_log_free(log);
     if (pc.failed != FL_PROGRESS_OK) {
-        hierarchy_release(h);
+        hierarchy_release(L, h);
         fl_opts_progress_check(&o, &pc, st);
     }
     if (st != FEMLOD_OK) {
-        hierarchy_release(h);
+        hierarchy_release(L, h);
         return fl_lua_raise(L, &err);
     }
+    hierarchy_charge(L, h);
     if (fl_lua_verbose(L)) {
         const femlod_simplify_result *r = &h->result;
         fl_lua_log(L, "simplify: %zu -> %zu triangles, %zu collapses, stopped: %s (%.3f s)",
@@ -367,9 +387,10 @@ static int lib_load_hierarchy(lua_State *L) {
     femlod_error err;
     double t0 = fl_lua_clock();
     if (femlod_hierarchy_load(&h->hier, path, &h->result, &err) != FEMLOD_OK) {
-        hierarchy_release(h);
+        hierarchy_release(L, h);
         return fl_lua_raise(L, &err);
     }
+    hierarchy_charge(L, h);
     if (fl_lua_verbose(L))
         fl_lua_log(L, "load %s: %zu nodes, front %zu triangles (%.3f s)", path,
                    femlod_hierarchy_node_count(h->hier), femlod_hierarchy_front_triangles(h->hier),
@@ -1236,7 +1257,7 @@ static int hierarchy_gc(lua_State *L) {
     fl_hierarchy *h = (fl_hierarchy *)luaL_checkudata(L, 1, FL_HIERARCHY_MT);
     if (h->busy)
         return luaL_error(L, "attempt to close a femlod.Hierarchy inside its own size or progress function");
-    hierarchy_release(h);
+    hierarchy_release(L, h);
     return 0;
 }
 

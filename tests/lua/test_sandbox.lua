@@ -271,6 +271,29 @@ do
   T.eq(out, "false\tnot enough memory\n", "the recipe saw the memory error")
   T.eq(err, "femlod: " .. caught .. ":2: something else\n", "the other error is reported")
 end
+-- Hierarchies are charged too: kept ones reach the cap (fandisk's is about 2.5 MB,
+-- its work memory about 8 MB), dropped ones are refunded.
+local hiers = recipe("local m = femlod.load('recipes/fandisk.obj')\n"
+  .. "local t = {}\nwhile true do t[#t + 1] = m:simplify { target = 6000 } end\n")
+capped("kept hierarchies", { "run", "--max-memory", "40M", hiers }, 3,
+  "femlod: " .. hiers .. ":3: memory limit of 40M exceeded (--max-memory)\n")
+local hdropped = recipe("local m = femlod.load('recipes/fandisk.obj')\n"
+  .. "for i = 1, 30 do local h <close> = m:simplify { target = 6000 } end print('ok')\n")
+do
+  local st, out, err = run("run", "--max-memory", "40M", hdropped)
+  T.eq(st, 0, "closed hierarchies: exit " .. err)
+  T.eq(out, "ok\n", "closed hierarchies: refunded, ran to the end")
+end
+-- A simplification whose work memory would pass the cap is refused before it starts.
+local big = recipe("local m = femlod.load('recipes/fandisk.obj'):subdivide(2)\n"
+  .. "print(#m:triangles())\nlocal h = m:simplify { target = 1000 }\n")
+do
+  local st, out, err = run("run", "--max-memory", "100M", big)
+  T.eq(st, 3, "simplify past the cap: exit")
+  T.eq(out, "207136\n", "simplify past the cap: the mesh was made")
+  T.eq(err, "femlod: " .. big .. ":3: memory limit of 100M exceeded (--max-memory)\n",
+    "simplify past the cap: refused at its line")
+end
 -- The cap on a command without a recipe.
 capped("info under 64K", { "--max-memory", "64K", "info", P.shared .. "/fandisk.obj" }, 3,
   "femlod: memory limit of 64K exceeded (--max-memory)\n")
