@@ -2006,7 +2006,7 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
     ring *R = &S->R;
     uint32_t em = next_stamp(S);
     uint32_t best = UINT32_MAX;
-    float bkey = -1.0f, vb = -1.0f, second = -1.0f;
+    float bkey = -1.0f, vb = -1.0f;
     const uint32_t *fl = S->refs + S->fstart[v];
     uint32_t cnt = S->fcount[v];
     for (uint32_t a = 0; a < cnt; a++) {
@@ -2029,11 +2029,8 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
             uint32_t u = S->ev[2 * (size_t)ed] == v ? S->ev[2 * (size_t)ed + 1] : S->ev[2 * (size_t)ed];
             if (S->vlock[u] == S->pass || !(key >= (float)tau)) continue;
             if (key > bkey || (key == bkey && ed < best)) {
-                if (bkey > second) second = bkey;
                 bkey = key;
                 best = ed;
-            } else if (key > second) {
-                second = key;
             }
         }
     }
@@ -2057,9 +2054,18 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
     }
     if (chosen < 0) {
         /* refused for reasons outside its key (topology, the costly
-         * checks): out of these passes until its neighbourhood changes */
+         * checks): out of the passes until one of its ends moves (the
+         * exact queue evaluates it again); v's best key without it */
         if (rho >= tau) S->ekey[best] = -1.0f;
-        float rest = mx(second, S->ekey[best]);
+        float rest = -1.0f;
+        for (uint32_t a = 0; a < cnt; a++) {
+            const uint32_t *t = S->tri + 3 * (size_t)fl[a];
+            for (int c = 0; c < 3; c++) {
+                if (t[c] != v && t[(c + 1) % 3] != v) continue;
+                uint32_t ed = S->tedge[3 * (size_t)fl[a] + c];
+                if (!(S->eflag[ed] & E_DEAD) && S->ekey[ed] > rest) rest = S->ekey[ed];
+            }
+        }
         S->vbest[v] = rest;
         return 0;
     }
@@ -2116,7 +2122,6 @@ static int band_run(simp *S, const femlod_simplify_options *o, size_t floor_live
         if (key > top) top = key;
     }
     double tau = (double)top * FEMLOD_SIMPLIFY_BAND;
-    int r = 1;
     while (top >= 0.0f && S->live > floor_live) {
         if (++S->pass == 0) { /* wrapped: unlock all */
             memset(S->vlock, 0, S->nv * sizeof *S->vlock);
@@ -2138,9 +2143,14 @@ static int band_run(simp *S, const femlod_simplify_options *o, size_t floor_live
             if (S->vbest[v] > top && S->vbest[v] < FLT_MAX) top = S->vbest[v];
         }
         if (S->oom) return 0;
-        /* next band; a pass without a collapse jumps to the best key left */
-        tau = done ? tau * FEMLOD_SIMPLIFY_BAND : mn(tau * FEMLOD_SIMPLIFY_BAND, (double)top);
-        if (done) top = FLT_MAX - 1.0f; /* keys changed: go on */
+        /* next band; a pass without a collapse jumps to the best key left
+         * (none left: done) */
+        if (done) {
+            tau *= FEMLOD_SIMPLIFY_BAND;
+            top = 0.0f; /* keys changed: go on */
+        } else {
+            tau = mn(tau * FEMLOD_SIMPLIFY_BAND, (double)top);
+        }
     }
     /* back to the queue's conventions */
     for (size_t ed = 0; ed < S->ne; ed++) S->eflag[ed] &= (uint8_t)~E_STALE;
@@ -2150,7 +2160,7 @@ static int band_run(simp *S, const femlod_simplify_options *o, size_t floor_live
     S->vlock = NULL;
     S->vbest = NULL;
     S->ekey = NULL;
-    return r;
+    return 1;
 }
 
 /* }====== */
