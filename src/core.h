@@ -193,6 +193,13 @@ FL_INTERNAL void fl_out_abort(fl_out *o);
  * shortest "%.Ng" form (N <= 17) that reads back to exactly x. */
 FL_INTERNAL double fl_strtod(const char *s, char **end);
 FL_INTERNAL int fl_format_double(char *buf, size_t size, double x);
+/* fl_format_double within width characters: when the shortest exact form
+ * is longer, the most significant digits that fit, in exponent form (so
+ * the value is rounded: in 20 characters 15 digits, 14 with a minus sign,
+ * one less with a three-digit exponent). For formats whose
+ * readers limit a field's length (CalculiX: 20 characters). -1 when even
+ * "1e+00" does not fit. */
+FL_INTERNAL int fl_format_double_fit(char *buf, size_t size, double x, int width);
 
 /* }====== */
 

@@ -565,4 +565,26 @@ int fl_format_double(char *buf, size_t size, double x) {
     return n;
 }
 
+int fl_format_double_fit(char *buf, size_t size, double x, int width) {
+    int n = fl_format_double(buf, size, x);
+    if (n < 0 || n <= width) return n;
+    /* too long: the most digits in exponent form that fit (the last digit
+     * rounded) */
+    char tmp[40];
+    locale_t loc = c_locale();
+    locale_t old = loc ? uselocale(loc) : (locale_t)0;
+    int m = -1;
+    for (int p = 16; p >= 0; p--) {
+        m = snprintf(tmp, sizeof tmp, "%.*e", p, x);
+        if (m > 0 && m <= width) break;
+    }
+    if (loc) uselocale(old);
+    if (m < 0 || m > width || (size_t)m >= size) {
+        if (size) buf[0] = '\0';
+        return -1;
+    }
+    memcpy(buf, tmp, (size_t)m + 1);
+    return m;
+}
+
 /* }====== */

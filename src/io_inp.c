@@ -190,9 +190,13 @@ femlod_status fl_write_inp(const femlod_mesh *m, FILE *fp, const femlod_write_op
     }
     int ok = fprintf(fp, "** femlod %s: %zu nodes, %zu S3 elements\n*NODE, NSET=NALL\n",
                      FEMLOD_VERSION_STRING, m->nv, m->nt) > 0;
+    /* CalculiX reads at most 20 characters per number (a longer one is
+     * "*ERROR reading *NODE" and every later node is lost): the shortest
+     * exact form when it fits, else the digits that fit (13 to 15) */
     for (size_t i = 0; i < m->nv && ok; i++) {
-        ok &= fprintf(fp, "%zu, ", i + 1) > 0;
-        ok &= fl_io_put_xyz(fp, m->pos + 3 * i, ", ", "\n");
+        char xyz[3][32];
+        for (int k = 0; k < 3 && ok; k++) ok &= fl_format_double_fit(xyz[k], sizeof xyz[k], m->pos[3 * i + (size_t)k], 20) > 0;
+        ok &= ok && fprintf(fp, "%zu, %s, %s, %s\n", i + 1, xyz[0], xyz[1], xyz[2]) > 0;
     }
     if (m->nt) ok &= fputs("*ELEMENT, TYPE=S3, ELSET=EALL\n", fp) >= 0;
     for (size_t i = 0; i < m->nt && ok; i++) {

@@ -76,6 +76,9 @@
 #ifndef FEMLOD_SIMPLIFY_LINE_TURN
 #define FEMLOD_SIMPLIFY_LINE_TURN 20.0 /* degrees: a feature line this straight takes midpoints */
 #endif
+#ifndef FEMLOD_SIMPLIFY_CERTIFY
+#define FEMLOD_SIMPLIFY_CERTIFY 1 /* star certificates in the intersection test */
+#endif
 #ifndef FEMLOD_SIMPLIFY_BOUND
 #define FEMLOD_SIMPLIFY_BOUND 0 /* 1: exact lazy re-evaluation with upper bounds (docs/simplify.md: fewer evaluations, more time) */
 #endif
@@ -214,6 +217,8 @@ typedef struct simp {
     double *tbox;   /* per ring face: box of the new triangle */
     size_t tbox_cap;
     fl_tri_plane *tplane; /* per ring face: plane of the new triangle */
+    uint8_t *cert;        /* per ring face: star certificates of a and b (intersect_check) */
+    size_t cert_cap;
     size_t tplane_cap;
     float *newcone; /* per ring face */
     size_t newcone_cap;
@@ -915,6 +920,56 @@ static int deviation_check(simp *S, ring *R, const double p[3], size_t *np) {
     return NO_REASON;
 }
 
+/* Star certificate (docs/simplify.md "Intersection test: invariants"): the
+ * closed star of a vertex at c, faces (c, u[f], w[f]) in mesh orientation,
+ * projects one to one onto the plane through c across the sum of its face
+ * normals: every face turns positively about that normal and the faces'
+ * angular sectors wind once around c. Then two of its faces meet only at c
+ * or along their common edge, and their pair test can be skipped. Decided
+ * with margins: anything near a sector's border or near edge-on is "no
+ * certificate" (the full tests run). */
+static int star_embedded(const double c[3], const double *const *u, const double *const *w, size_t nf) {
+    if (nf < 3) return 0;
+    double n[3] = {0, 0, 0};
+    for (size_t f = 0; f < nf; f++) {
+        double a[3], b[3], x[3];
+        sub3(a, u[f], c);
+        sub3(b, w[f], c);
+        cross3(x, a, b);
+        n[0] += x[0];
+        n[1] += x[1];
+        n[2] += x[2];
+    }
+    double nn = sqrt(dot3(n, n));
+    if (!(nn > 0.0)) return 0;
+    double d[3]; /* reference direction: the first face's first edge */
+    sub3(d, u[0], c);
+    double dl = sqrt(dot3(d, d));
+    const double rel = 1e-9;
+    int wind = 1; /* face 0's sector starts on d */
+    for (size_t f = 0; f < nf; f++) {
+        double a[3], b[3], x[3];
+        sub3(a, u[f], c);
+        sub3(b, w[f], c);
+        double al = sqrt(dot3(a, a)), bl = sqrt(dot3(b, b));
+        cross3(x, a, b);
+        /* turns positively, clearly (not edge-on, not degenerate) */
+        if (!(dot3(x, n) > 1e-6 * al * bl * nn)) return 0;
+        if (f == 0) continue;
+        double ad[3], db[3];
+        cross3(ad, a, d);
+        cross3(db, d, b);
+        double t1 = dot3(ad, n), t2 = dot3(db, n);
+        double m1 = rel * al * dl * nn, m2 = rel * dl * bl * nn;
+        /* the face before face 0 ends on d itself: outside (sectors are
+         * half-open, [u, w)) */
+        if (w[f] == u[0]) continue;
+        if ((t1 > -m1 && t1 < m1) || (t2 > -m2 && t2 < m2)) return 0; /* d near a border */
+        if (t1 > 0.0 && t2 > 0.0) wind++;
+    }
+    return wind == 1;
+}
+
 #define K_ID (UINT32_MAX - 1) /* the id of the new vertex in intersection tests */
 
 /* No new triangle may cross another triangle of the mesh (issue 3): each new
@@ -949,6 +1004,54 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
         const uint32_t *fl = S->refs + S->fstart[v];
         for (uint32_t m = 0; m < S->fcount[v]; m++) S->fmark[fl[m]] = ex;
     }
+    /* star certificates of k and of the ring vertices (interior, manifold
+     * ones), per new triangle: cert[2r] for a_r, cert[2r+1] for b_r */
+    int kcert = 0;
+    if (!buf_reserve((void **)&S->cert, &S->cert_cap, 2 * R->n + 2, 1)) {
+        S->oom = 1;
+        return FEMLOD_REJECT_INTERSECTION;
+    }
+    memset(S->cert, 0, 2 * R->n);
+    if (FEMLOD_SIMPLIFY_CERTIFY && !((S->vflag[R->i] | S->vflag[R->j]) & (V_BOUNDARY | V_NONMANIFOLD)) &&
+        R->n <= 64) {
+        const double *U[64] = {NULL}, *W[64] = {NULL};
+        for (size_t r = 0; r < R->n; r++) {
+            U[r] = P(S, R->a[r]);
+            W[r] = P(S, R->b[r]);
+        }
+        kcert = star_embedded(p, U, W, R->n);
+        for (size_t r = 0; r < R->n; r++)
+            for (int e = 0; e < 2; e++) {
+                uint32_t v = e ? R->b[r] : R->a[r];
+                if (S->vflag[v] & (V_BOUNDARY | V_NONMANIFOLD)) continue;
+                /* the same vertex in an earlier triangle: its answer */
+                int known = -1;
+                for (size_t q = 0; q < r && known < 0; q++) {
+                    if (R->a[q] == v) known = S->cert[2 * q];
+                    else if (R->b[q] == v) known = S->cert[2 * q + 1];
+                }
+                if (known < 0 && e == 1 && R->a[r] == v) known = S->cert[2 * r];
+                if (known >= 0) {
+                    S->cert[2 * r + (size_t)e] = (uint8_t)known;
+                    continue;
+                }
+                const uint32_t *fl = S->refs + S->fstart[v];
+                uint32_t cnt = S->fcount[v];
+                if (cnt > 64) continue;
+                size_t nf = 0;
+                for (uint32_t m = 0; m < cnt; m++) {
+                    uint32_t f = fl[m];
+                    if ((R->ns > 0 && f == R->sface[0]) || (R->ns > 1 && f == R->sface[1])) continue;
+                    const uint32_t *t = S->tri + 3 * (size_t)f;
+                    int c = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+                    uint32_t x = t[(c + 1) % 3], y = t[(c + 2) % 3];
+                    U[nf] = x == R->i || x == R->j ? p : P(S, x);
+                    W[nf] = y == R->i || y == R->j ? p : P(S, y);
+                    nf++;
+                }
+                S->cert[2 * r + (size_t)e] = (uint8_t)star_embedded(P(S, v), U, W, nf);
+            }
+    }
     /* one pass over the cells under the fan; each triangle met once */
     int c0[3], c1[3];
     fl_grid_range(&S->grid, lo, hi, c0, c1);
@@ -982,6 +1085,11 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                             if (qb[0] > bx[3] || qb[1] > bx[4] || qb[2] > bx[5] || qb[3] < bx[0] ||
                                 qb[4] < bx[1] || qb[5] < bx[2])
                                 continue;
+                            /* both in the certified star of a shared corner */
+                            uint32_t ar = R->a[r], br = R->b[r];
+                            if ((S->cert[2 * r] && (t[0] == ar || t[1] == ar || t[2] == ar)) ||
+                                (S->cert[2 * r + 1] && (t[0] == br || t[1] == br || t[2] == br)))
+                                continue;
                             const double *T[3] = {p, P(S, R->a[r]), P(S, R->b[r])};
                             uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
                             STAT(tritri);
@@ -994,7 +1102,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                 }
             }
     /* the new triangles among themselves: they all share k */
-    for (size_t r = 0; r < R->n; r++) {
+    for (size_t r = 0; r < R->n && !kcert; r++) {
         const double *T[3] = {p, P(S, R->a[r]), P(S, R->b[r])};
         uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
         const double *br = S->tbox + 6 * r;
@@ -1485,6 +1593,7 @@ static void simp_free(simp *S) {
     free(S->newcone);
     free(S->tbox);
     free(S->tplane);
+    free(S->cert);
 }
 
 static int bad_number(double x) { return isnan(x) || isinf(x); }

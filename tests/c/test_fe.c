@@ -301,6 +301,48 @@ static void test_writers(void) {
 
 /* {====== .inp and its sets */
 
+/* CalculiX reads at most 20 characters per number: a node card with a longer
+ * one fails and every later node is lost (found by fe_tools on a simplified
+ * cover with a vertex at x = 1.7759175032026203e-08). Every number fits, the
+ * ones whose shortest exact form fits stay exact, the others keep as many
+ * significant digits as fit (15 for a positive number with a two-digit
+ * exponent, 13 at worst). */
+static void test_inp_widths(void) {
+    static const double pos[] = {-1.7759175032026203e-08, 139.36867163338422, 2.2762897584326667,
+                                 1.7759175032026203e-08, -0.1, 1e-300,
+                                 -1.2345678901234567e+100, 0.00012345678901234567, 4.9};
+    static const uint32_t tri[] = {0, 1, 2};
+    femlod_mesh *m = NULL;
+    CHECK(femlod_mesh_create(&m, pos, 3, tri, 1, NULL) == FEMLOD_OK);
+    if (!m) return;
+    char *t = write_text(m, "widths.inp", NULL);
+    const char *c = t ? strstr(t, "*NODE, NSET=NALL\n") : NULL;
+    CHECK(c != NULL);
+    if (c) c += strlen("*NODE, NSET=NALL\n");
+    for (int v = 0; v < 3 && c; v++) {
+        unsigned id = 0;
+        int used = 0;
+        CHECK(sscanf(c, "%u, %n", &id, &used) == 1 && id == (unsigned)v + 1);
+        c += used;
+        for (int k = 0; k < 3; k++) {
+            size_t len = strcspn(c, ",\n");
+            CHECK(len > 0 && len <= 20);
+            char field[64];
+            snprintf(field, sizeof field, "%.*s", (int)len, c);
+            double x = strtod(field, NULL), want = pos[3 * v + k];
+            CHECK(fabs(x - want) <= 1e-12 * fabs(want)); /* 13 digits at worst: -1.234567890123e+100 */
+            if (len < 20 && strlen(field) <= 18) CHECK(x == want); /* fits exactly: kept exact */
+            c += len;
+            if (*c == ',') c += 2;
+        }
+        CHECK(*c == '\n');
+        c++;
+    }
+    CHECK_STR_HAS(t, "1, -1.7759175032026e-08, 139.36867163338422, 2.2762897584326667\n");
+    free(t);
+    femlod_mesh_free(m);
+}
+
 static void test_inp(void) {
     femlod_mesh *m = two_triangles();
     if (!m) return;
@@ -430,6 +472,7 @@ int main(void) {
     test_binary_big_endian();
     test_writers();
     test_inp();
+    test_inp_widths();
     rmdir(scratch);
     return check_report("fe");
 }
