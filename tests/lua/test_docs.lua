@@ -90,16 +90,13 @@ do
       T.check(has(apidoc, name), "docs/api.md names " .. name .. "()")
     end
   end
-  for name in header:gmatch("typedef%s+[%w_%s%*]-(femlod_[%w_]+)%s*;") do
-    if not seen[name] then
-      seen[name] = true
-      T.check(has(apidoc, name), "docs/api.md names the type " .. name)
-    end
-  end
-  for name in header:gmatch("}%s*(femlod_[%w_]+)%s*;") do
-    if not seen[name] then
-      seen[name] = true
-      T.check(has(apidoc, name), "docs/api.md names the type " .. name)
+  -- types: "typedef ... name;" and "} name;"
+  for _, pattern in ipairs { "typedef%s+[%w_%s%*]-(femlod_[%w_]+)%s*;", "}%s*(femlod_[%w_]+)%s*;" } do
+    for name in header:gmatch(pattern) do
+      if not seen[name] then
+        seen[name] = true
+        T.check(has(apidoc, name), "docs/api.md names the type " .. name)
+      end
     end
   end
   T.check(n >= 40, "the header's functions were found: " .. n)
