@@ -717,9 +717,7 @@ static void test_determinism(void) {
 
 /* max_deviation: every input vertex ends within the bound of the output
  * (the removed ones by the tracking, the kept ones trivially). */
-static void test_max_deviation(void) {
-    femlod_mesh *m = load("fandisk.obj");
-    if (!m) return;
+static void max_deviation_cases(const femlod_mesh *m, int fast) {
     const double bounds[2] = {0.004, 0.001};
     size_t reached[2] = {0, 0};
     for (int k = 0; k < 2; k++) {
@@ -727,9 +725,10 @@ static void test_max_deviation(void) {
         o.target = 300;
         o.tolerance = FEMLOD_SIMPLIFY_OFF;
         o.max_deviation = bounds[k];
+        o.fast_above = fast ? 2.0 : 0.0;
         run r;
         char label[64];
-        snprintf(label, sizeof label, "fandisk max_deviation %g", bounds[k]);
+        snprintf(label, sizeof label, "fandisk max_deviation %g%s", bounds[k], fast ? " fast" : "");
         if (!simplify_checked(&r, m, &o, label)) continue;
         double worst = 0;
         for (size_t v = 0; v < m->nv; v++) worst = fmax(worst, dist_to_mesh(m->pos + 3 * v, r.out));
@@ -739,6 +738,14 @@ static void test_max_deviation(void) {
         run_free(&r);
     }
     CHECK(reached[1] > reached[0]); /* the tighter bound binds */
+}
+
+/* In the exact order and with fast passes. */
+static void test_max_deviation(void) {
+    femlod_mesh *m = load("fandisk.obj");
+    if (!m) return;
+    max_deviation_cases(m, 0);
+    max_deviation_cases(m, 1);
     femlod_mesh_free(m);
 }
 
@@ -754,9 +761,7 @@ static int find_position(const femlod_mesh *m, const double *p) {
     return 0;
 }
 
-static void test_lock(void) {
-    femlod_mesh *m = load("fandisk.obj");
-    if (!m) return;
+static void lock_case(const femlod_mesh *m, int fast) {
     uint32_t ids[64];
     for (int q = 0; q < 64; q++) ids[q] = (uint32_t)((q * 2654435761u) % m->nv);
     femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
@@ -766,8 +771,9 @@ static void test_lock(void) {
     double ycut = 0.2;
     o.lock_fn = lock_upper;
     o.lock_payload = &ycut;
+    o.fast_above = fast ? 2.0 : 0.0;
     run r;
-    if (simplify_checked(&r, m, &o, "fandisk lock 64 + y>0.2")) {
+    if (simplify_checked(&r, m, &o, fast ? "fandisk lock 64 + y>0.2 fast" : "fandisk lock 64 + y>0.2")) {
         size_t missing = 0, locked = 0;
         for (int q = 0; q < 64; q++) missing += !find_position(r.out, m->pos + 3 * (size_t)ids[q]);
         for (size_t v = 0; v < m->nv; v++)
@@ -780,6 +786,14 @@ static void test_lock(void) {
         CHECK(locked > 0);
     }
     run_free(&r);
+}
+
+/* In the exact order and with fast passes. */
+static void test_lock(void) {
+    femlod_mesh *m = load("fandisk.obj");
+    if (!m) return;
+    lock_case(m, 0);
+    lock_case(m, 1);
     femlod_mesh_free(m);
 }
 
