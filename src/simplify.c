@@ -2103,10 +2103,6 @@ static int run_queue(simp *S, const femlod_simplify_options *o, size_t live0, si
 #define FEMLOD_SIMPLIFY_BAND 0.9 /* each pass lowers the threshold by this factor */
 #endif
 
-/* Marks an edge's key out of date (an endpoint moved). E_STALE is free in
- * the passes: the lazy queue (FEMLOD_SIMPLIFY_BOUND) is not used there. */
-static inline void band_stale(simp *S, uint32_t ed) { S->eflag[ed] |= E_STALE; }
-
 /* One visit of slot v in a pass with threshold tau: evaluates v's edges
  * whose key is out of date, then tries v's best edge if it reaches tau and
  * its other end is not locked in this pass. Returns 1 collapsed, 0 not, -1
@@ -2194,9 +2190,11 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
             S->vlock[t[c]] = S->pass;
             S->vbest[t[c]] = FLT_MAX;
             if (t[c] == k || t[(c + 1) % 3] == k) {
+                /* E_STALE marks the key out of date (free in the passes:
+                 * the lazy queue, FEMLOD_SIMPLIFY_BOUND, is not used there);
+                 * the cached optimum is gone with the endpoint */
                 uint32_t ed = S->tedge[3 * (size_t)f + c];
-                band_stale(S, ed);
-                S->eflag[ed] &= (uint8_t)~E_OPT;
+                S->eflag[ed] = (uint8_t)((S->eflag[ed] | E_STALE) & ~E_OPT);
             }
         }
     }

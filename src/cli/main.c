@@ -503,6 +503,15 @@ static int check_format(const char *key, const char *name) {
     return -1;
 }
 
+/* The pairs format= (of OUT) and input_format= (of IN) of convert and
+ * repair, checked: -1, or the usage error's exit status. */
+static int io_formats(lua_State *L, int pairs, const char **format, const char **input_format) {
+    *format = pair_string(L, pairs, "format");
+    *input_format = pair_string(L, pairs, "input_format");
+    int st = check_format("format", *format);
+    return st >= 0 ? st : check_format("input_format", *input_format);
+}
+
 /* femlod.load(path, {format = format}); leaves the mesh on the stack (also
  * report.c's, through sweep.h). */
 void fl_cli_load_mesh(lua_State *L, int module, const char *path, const char *format) {
@@ -618,10 +627,8 @@ static int cmd_convert(lua_State *L, const cli *c) {
     int st = check_pairs(L, c, keys, "format, input_format, color_by, normals");
     if (st >= 0) return st;
     int pairs = lua_gettop(L);
-    const char *format = pair_string(L, pairs, "format");
-    const char *input_format = pair_string(L, pairs, "input_format");
-    if ((st = check_format("format", format)) >= 0) return st;
-    if ((st = check_format("input_format", input_format)) >= 0) return st;
+    const char *format, *input_format;
+    if ((st = io_formats(L, pairs, &format, &input_format)) >= 0) return st;
 
     const char *in = c->argv[c->operand], *out = c->argv[c->operand + 1];
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
@@ -660,10 +667,8 @@ static int cmd_repair(lua_State *L, const cli *c) {
                                      "orient, drop_unused, format, input_format");
     if (st >= 0) return st;
     int pairs = lua_gettop(L);
-    const char *format = pair_string(L, pairs, "format");
-    const char *input_format = pair_string(L, pairs, "input_format");
-    if ((st = check_format("format", format)) >= 0) return st;
-    if ((st = check_format("input_format", input_format)) >= 0) return st;
+    const char *format, *input_format;
+    if ((st = io_formats(L, pairs, &format, &input_format)) >= 0) return st;
     const char *in = c->argv[c->operand], *out = c->argv[c->operand + 1];
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);

@@ -14,15 +14,7 @@ local function quote(s) return "'" .. tostring(s):gsub("'", "'\\''") .. "'" end
 
 -- Runs femlod with the arguments; returns exit code, stdout, stderr.
 local ERR = path("stderr.txt")
-local function run(...)
-  local parts = { quote(FEMLOD) }
-  for i = 1, select("#", ...) do parts[#parts + 1] = quote((select(i, ...))) end
-  local p = assert(io.popen(table.concat(parts, " ") .. " 2>" .. quote(ERR) .. " </dev/null", "r"))
-  local out = p:read("a")
-  local _, how, code = p:close()
-  T.check(how == "exit", "femlod ended by a signal: " .. tostring(code))
-  return code, out, T.readfile(ERR) or ""
-end
+local run = T.runner(FEMLOD, ERR).run
 
 -- A recipe file in tmp.
 local function recipe(name, text)

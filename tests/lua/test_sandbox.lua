@@ -53,14 +53,11 @@ assert(sh("ln -s ../allowed/data.txt " .. quote(at("outside/link_to_allowed.txt"
 local ERR = at("stderr.txt")
 -- Runs femlod in ROOT with the arguments (prefix: a shell command put before);
 -- returns exit code, stdout, stderr.
+local shell = T.runner(FEMLOD, ERR)
 local function run_in(prefix, ...)
   local parts = { "cd " .. quote(ROOT) .. " &&", prefix or "", quote(FEMLOD) }
   for i = 1, select("#", ...) do parts[#parts + 1] = quote((select(i, ...))) end
-  local p = assert(io.popen(table.concat(parts, " ") .. " 2>" .. quote(ERR) .. " </dev/null", "r"))
-  local out = p:read("a")
-  local _, how, code = p:close()
-  T.check(how == "exit", "femlod ended by a signal: " .. tostring(code))
-  return code, out, T.readfile(ERR) or ""
+  return shell.sh(table.concat(parts, " "))
 end
 local function run(...) return run_in(nil, ...) end
 
