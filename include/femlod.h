@@ -467,6 +467,11 @@ typedef struct femlod_simplify_options {
      * FEMLOD_SIMPLIFY_OFF: the exact order throughout (the default); a value
      * in (0, 1) fails with FEMLOD_EINPUT. */
     double fast_above;
+    /* Threads for the fast passes (docs/design.md "Parallel fast passes"):
+     * 0 (the default) as many as the machine has processors, at most 16.
+     * The result does not depend on it: every value gives byte-identical
+     * output and log. Negative fails with FEMLOD_EINPUT. */
+    int threads;
     /* Input vertex indices that must keep their exact position (loads,
      * boundary conditions); out-of-range indices fail with FEMLOD_EINPUT.
      * Collapses may merge a neighbour into a locked vertex, never move it. */
@@ -482,7 +487,7 @@ typedef struct femlod_simplify_options {
     void *progress_payload;
 } femlod_simplify_options;
 
-#define FEMLOD_SIMPLIFY_OPTIONS_INIT {0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, NULL, 0, NULL, NULL, NULL, NULL}
+#define FEMLOD_SIMPLIFY_OPTIONS_INIT {0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0, NULL, 0, NULL, NULL, NULL, NULL}
 
 typedef enum femlod_stop_reason {
     FEMLOD_STOP_TARGET = 0,        /* the target count was reached */
@@ -532,6 +537,7 @@ typedef struct femlod_simplify_result {
         max_normal_change;
     int max_valence;
     double fast_above; /* the fast_above factor, FEMLOD_SIMPLIFY_OFF when off */
+    int threads;       /* threads the fast passes ran on (1 when they ran one, or did not run) */
 } femlod_simplify_result;
 
 /* The collapse log: every collapse in order, in a vertex numbering made for

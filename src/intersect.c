@@ -346,17 +346,10 @@ void fl_grid_free(fl_grid *g) {
     memset(g, 0, sizeof *g);
 }
 
-static inline int cell_coord(const fl_grid *g, double x, int k) {
-    double c = (x - g->origin[k]) * g->inv_h;
-    if (!(c > 0.0)) return 0; /* also NaN */
-    if (c >= (double)(g->n[k] - 1)) return g->n[k] - 1;
-    return (int)c;
-}
-
 void fl_grid_range(const fl_grid *g, const double lo[3], const double hi[3], int c0[3], int c1[3]) {
     for (int k = 0; k < 3; k++) {
-        c0[k] = cell_coord(g, lo[k], k);
-        c1[k] = cell_coord(g, hi[k], k);
+        c0[k] = fl_grid_coord(g, lo[k], k);
+        c1[k] = fl_grid_coord(g, hi[k], k);
     }
 }
 
@@ -364,8 +357,10 @@ static uint32_t new_block(fl_grid *g) {
     if (g->free_block != UINT32_MAX) {
         uint32_t b = g->free_block;
         g->free_block = g->blocks[b].next;
+        g->nfree--;
         return b;
     }
+    if (g->fixed) return UINT32_MAX;
     if (g->nblocks == g->capblocks) {
         size_t cap = g->capblocks * 2;
         if (cap >= UINT32_MAX) return UINT32_MAX;
@@ -375,6 +370,31 @@ static uint32_t new_block(fl_grid *g) {
         g->capblocks = cap;
     }
     return (uint32_t)g->nblocks++;
+}
+
+int fl_grid_take(fl_grid *g, size_t n, uint32_t *head) {
+    uint32_t h = UINT32_MAX;
+    for (size_t k = 0; k < n; k++) {
+        uint32_t b = new_block(g);
+        if (b == UINT32_MAX) {
+            fl_grid_give(g, h, k);
+            *head = UINT32_MAX;
+            return 0;
+        }
+        g->blocks[b].next = h;
+        h = b;
+    }
+    *head = h;
+    return 1;
+}
+
+void fl_grid_give(fl_grid *g, uint32_t head, size_t n) {
+    if (head == UINT32_MAX) return;
+    uint32_t t = head;
+    while (g->blocks[t].next != UINT32_MAX) t = g->blocks[t].next;
+    g->blocks[t].next = g->free_block;
+    g->free_block = head;
+    g->nfree += n;
 }
 
 int fl_grid_insert(fl_grid *g, uint32_t item, const double lo[3], const double hi[3]) {
@@ -426,6 +446,7 @@ void fl_grid_remove(fl_grid *g, uint32_t item, const double lo[3], const double 
                     g->cell[c].head = g->blocks[hb].next;
                     g->blocks[hb].next = g->free_block;
                     g->free_block = hb;
+                    g->nfree++;
                 }
             }
 }

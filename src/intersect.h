@@ -57,6 +57,8 @@ typedef struct fl_grid {
     fl_grid_block *blocks;
     size_t nblocks, capblocks;
     uint32_t free_block;
+    size_t nfree;  /* blocks on the free list */
+    int fixed;     /* 1: the free list only, never a new block (a worker's view, simplify.c) */
 } fl_grid;
 
 /* Grid over [lo, hi] with cells of about edge h, enlarged so that there are
@@ -68,9 +70,23 @@ FL_INTERNAL void fl_grid_free(fl_grid *g);
 FL_INTERNAL int fl_grid_insert(fl_grid *g, uint32_t item, const double lo[3], const double hi[3]);
 /* The box must be the one the item was inserted with. */
 FL_INTERNAL void fl_grid_remove(fl_grid *g, uint32_t item, const double lo[3], const double hi[3]);
+/* A chain of n free blocks (linked by next, UINT32_MAX-terminated) taken
+ * from the free list, then new ones: a fast-pass worker's own pool
+ * (simplify.c). 0 on ENOMEM, with nothing taken. */
+FL_INTERNAL int fl_grid_take(fl_grid *g, size_t n, uint32_t *head);
+/* Puts a chain of n free blocks back on the free list. */
+FL_INTERNAL void fl_grid_give(fl_grid *g, uint32_t head, size_t n);
 /* Cell index range [c0, c1] (inclusive) covering a box. */
 FL_INTERNAL void fl_grid_range(const fl_grid *g, const double lo[3], const double hi[3], int c0[3],
                                int c1[3]);
+
+/* The cell coordinate of x along axis k, clamped to the grid (NaN: 0). */
+static inline int fl_grid_coord(const fl_grid *g, double x, int k) {
+    double c = (x - g->origin[k]) * g->inv_h;
+    if (!(c > 0.0)) return 0; /* also NaN */
+    if (c >= (double)(g->n[k] - 1)) return g->n[k] - 1;
+    return (int)c;
+}
 
 static inline size_t fl_grid_cell(const fl_grid *g, int x, int y, int z) {
     return ((size_t)z * (size_t)g->n[1] + (size_t)y) * (size_t)g->n[0] + (size_t)x;

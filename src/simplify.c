@@ -53,9 +53,13 @@
 #include <assert.h>
 #include <math.h>
 #include <float.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #define PI 3.14159265358979323846
 
@@ -94,7 +98,12 @@
 #if FEMLOD_SIMPLIFY_STATS
 #include <stdio.h>
 #define STAT(x) ((void)(S->stats.x++))
+static double now_seconds(void);
+#define STAT_TIME(k, t0) ((void)(S->stats.t[k] += now_seconds() - (t0)))
+#define STAT_TIME_ST(k, t0) ((void)(S->stats.tstage[k] += now_seconds() - (t0)))
 #else
+#define STAT_TIME(k, t0) ((void)0)
+#define STAT_TIME_ST(k, t0) ((void)0)
 #define STAT(x) ((void)0)
 #endif
 
@@ -105,7 +114,9 @@ enum {
     V_BOUNDARY = 4,
     V_NONMANIFOLD = 8
 };
-/* edge flags */
+/* edge flags: eflag holds E_FEATURE and E_DEAD (the mesh), estate the
+ * rest (what the last evaluation left): a fast-pass worker writes the state
+ * of an edge while another may read its flags (docs/design.md) */
 enum {
     E_FEATURE = 1,
     E_DEAD = 2,
@@ -124,7 +135,15 @@ enum {
 };
 
 #define NO_REASON (-1)
+/* a fast-pass worker may not do this collapse in its slab: band_par's
+ * sequential remainder will (never counted as a rejection) */
+#define DEFER_REASON FEMLOD_REJECT_COUNT
 #define MAX_VSTARS 253
+
+typedef struct u32vec {
+    uint32_t *v;
+    size_t n, cap;
+} u32vec;
 
 typedef struct ring {
     uint32_t e, i, j;
@@ -151,6 +170,9 @@ typedef struct ring {
 
 typedef struct simp_stats {
     size_t evals, settles, bounds, rings, cands, cand_ok, solves, pops, links, expensive, cells, items, tritri, skipped;
+    double t[6]; /* seconds: setup, pre-phase, first evaluation of the passes, passes, queue, output */
+    size_t listed[3]; /* parallel passes: vertices listed in stage 0, 1, the remainder */
+    double tstage[3];
 } simp_stats;
 
 typedef struct simp {
@@ -195,7 +217,7 @@ typedef struct simp {
     size_t ne;
     uint32_t *ev;
     uint16_t *enf;
-    uint8_t *eflag;
+    uint8_t *eflag, *estate;
     uint32_t *emark;
     double *eopt;    /* per edge: the optimum candidate (E_OPT) */
     uint32_t *ehint; /* per edge and candidate (make_candidates order, first two): see eval_candidate */
@@ -233,6 +255,15 @@ typedef struct simp {
     float *vbest, *ekey;
     uint32_t pass;
     size_t swept;
+    /* parallel fast passes (band_par): the thread count; in a worker's view
+     * (par = 1) the slab it owns, the live triangles at the start of its
+     * task and how many it may remove, and its new vertices' slots */
+    int nthreads;
+    int par;
+    int slab_ax;
+    uint32_t slab, slab_w, slab_shift;
+    size_t live_start, live_budget;
+    u32vec *klist;
     femlod_collapse_log *log;
     size_t collapses, prephase;
     size_t rejected[FEMLOD_REJECT_COUNT];
@@ -701,7 +732,7 @@ static void make_candidates(simp *S, ring *R) {
     if (FEMLOD_SIMPLIFY_USE_OPTIMUM) {
         /* cached while i and j keep their positions and quadrics (cleared
          * for the edges at k after each collapse, reevaluate_ring) */
-        uint8_t *fl = S->eflag + R->e;
+        uint8_t *fl = S->estate + R->e;
         double *opt = S->eopt + 3 * (size_t)R->e;
         if (!(*fl & E_OPT)) {
             STAT(solves);
@@ -972,6 +1003,12 @@ static int star_embedded(const double c[3], const double *const *u, const double
 
 #define K_ID (UINT32_MAX - 1) /* the id of the new vertex in intersection tests */
 
+/* The slab (band_par) of a grid cell coordinate and of a point. */
+static inline uint32_t slab_of_cell(const simp *S, int c) { return ((uint32_t)c + S->slab_shift) / S->slab_w; }
+static inline uint32_t slab_of(const simp *S, const double *p) {
+    return slab_of_cell(S, fl_grid_coord(&S->grid, p[S->slab_ax], S->slab_ax));
+}
+
 /* No new triangle may cross another triangle of the mesh (issue 3): each new
  * triangle is tested against the triangles whose grid cells its box
  * overlaps, the triangles being replaced excepted, and against the other new
@@ -1055,6 +1092,10 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
     /* one pass over the cells under the fan; each triangle met once */
     int c0[3], c1[3];
     fl_grid_range(&S->grid, lo, hi, c0, c1);
+    /* a fast-pass worker reads cells of its slab and the two next to it
+     * only: no other worker writes those (band_par) */
+    if (S->par && (slab_of_cell(S, c0[S->slab_ax]) + 1 < S->slab || slab_of_cell(S, c1[S->slab_ax]) > S->slab + 1))
+        return DEFER_REASON;
     for (int z = c0[2]; z <= c1[2]; z++)
         for (int y = c0[1]; y <= c1[1]; y++)
             for (int x = c0[0]; x <= c1[0]; x++) {
@@ -1068,8 +1109,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                     for (uint32_t s = 0; s < lim; s++) {
                         uint32_t f = B->item[s];
                         STAT(items);
-                        if (S->fmark[f] == ex) continue; /* being replaced, or met */
-                        S->fmark[f] = ex;
+                        if (S->fmark[f] == ex) continue; /* being replaced */
                         const uint32_t *t = S->tri + 3 * (size_t)f;
                         const double *Q[3] = {P(S, t[0]), P(S, t[1]), P(S, t[2])};
                         double qb[6];
@@ -1080,6 +1120,17 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                         if (qb[0] > hi[0] || qb[1] > hi[1] || qb[2] > hi[2] || qb[3] < lo[0] ||
                             qb[4] < lo[1] || qb[5] < lo[2])
                             continue;
+                        /* met once: in the first walked cell of its box (the
+                         * box it was inserted with: its corners have not
+                         * moved since), not by a mark, which would be a write
+                         * to a face a fast-pass worker does not own */
+                        {
+                            int fx = fl_grid_coord(&S->grid, qb[0], 0), fy = fl_grid_coord(&S->grid, qb[1], 1),
+                                fz = fl_grid_coord(&S->grid, qb[2], 2);
+                            if (x != (fx > c0[0] ? fx : c0[0]) || y != (fy > c0[1] ? fy : c0[1]) ||
+                                z != (fz > c0[2] ? fz : c0[2]))
+                                continue;
+                        }
                         for (size_t r = 0; r < R->n; r++) {
                             const double *bx = S->tbox + 6 * r;
                             if (qb[0] > bx[3] || qb[1] > bx[4] || qb[2] > bx[5] || qb[3] < bx[0] ||
@@ -1396,7 +1447,7 @@ static void update_edge(simp *S, uint32_t ed, int eligible) {
         return;
     }
     double rho = evaluate(S, &S->R, ed);
-    S->eflag[ed] = (uint8_t)((S->eflag[ed] & ~(E_TOLFAIL | E_STALE)) | (S->R.tolfail ? E_TOLFAIL : 0));
+    S->estate[ed] = (uint8_t)((S->estate[ed] & ~(E_TOLFAIL | E_STALE)) | (S->R.tolfail ? E_TOLFAIL : 0));
     if (rho >= 0.0) fl_heap_set(&S->heap, ed, rho);
     else fl_heap_remove(&S->heap, ed);
 }
@@ -1405,10 +1456,10 @@ static void update_edge(simp *S, uint32_t ed, int eligible) {
  * from k): the same decisions on validity and E_TOLFAIL. */
 static void bound_update(simp *S, uint32_t ed, uint32_t k) {
     double ub = bound_edge(S, &S->R, ed, k);
-    S->eflag[ed] = (uint8_t)((S->eflag[ed] & ~(E_TOLFAIL | E_STALE)) | (S->R.tolfail ? E_TOLFAIL : 0));
+    S->estate[ed] = (uint8_t)((S->estate[ed] & ~(E_TOLFAIL | E_STALE)) | (S->R.tolfail ? E_TOLFAIL : 0));
     if (ub >= 0.0) {
         fl_heap_set(&S->heap, ed, ub);
-        S->eflag[ed] |= E_STALE;
+        S->estate[ed] |= E_STALE;
     } else {
         fl_heap_remove(&S->heap, ed);
     }
@@ -1421,7 +1472,7 @@ static void bound_update(simp *S, uint32_t ed, uint32_t k) {
 static void settle(simp *S) {
     while (fl_heap_size(&S->heap) && !S->oom) {
         uint32_t t = fl_heap_top(&S->heap);
-        if (!(S->eflag[t] & E_STALE)) return;
+        if (!(S->estate[t] & E_STALE)) return;
         STAT(settles);
         update_edge(S, t, 1);
     }
@@ -1482,11 +1533,11 @@ static int reevaluate_ring(simp *S, uint32_t k) {
     }
     for (size_t x = 0; x < ne; x++) {
         uint32_t ed = S->ebuf[2 * x];
-        if (S->ev[2 * (size_t)ed] == k || S->ev[2 * (size_t)ed + 1] == k) S->eflag[ed] &= (uint8_t)~E_OPT;
+        if (S->ev[2 * (size_t)ed] == k || S->ev[2 * (size_t)ed + 1] == k) S->estate[ed] &= (uint8_t)~E_OPT;
         else if (S->phase == 1) {
             /* An edge away from k keeps its endpoints, hence its candidates
              * and their quadric errors: one that failed C1 alone still does. */
-            if (S->eflag[ed] & E_TOLFAIL) {
+            if (S->estate[ed] & E_TOLFAIL) {
                 STAT(skipped);
                 continue;
             }
@@ -1548,6 +1599,74 @@ static int erec_less(const erec *x, const erec *y) {
     return x->side < y->side;
 }
 
+/* The per-thread part: the ring and the check buffers. */
+static void simp_free_scratch(simp *S) {
+    free(S->R.face);
+    free(S->R.a);
+    free(S->R.b);
+    free(S->R.from_j);
+    free(S->R.lab);
+    free(S->R.lab2);
+    free(S->ebuf);
+    free(S->pbuf);
+    free(S->pdst);
+    free(S->newcone);
+    free(S->tbox);
+    free(S->tplane);
+    free(S->cert);
+}
+
+/* A worker's view of the run (band_par): the run's state with w's own
+ * scratch kept. */
+static void simp_view(simp *w, const simp *S) {
+    ring R = w->R;
+    uint32_t *ebuf = w->ebuf, *pbuf = w->pbuf, *pdst = w->pdst;
+    size_t ebuf_cap = w->ebuf_cap, pbuf_cap = w->pbuf_cap, pdst_cap = w->pdst_cap;
+    double *tbox = w->tbox;
+    size_t tbox_cap = w->tbox_cap;
+    fl_tri_plane *tplane = w->tplane;
+    size_t tplane_cap = w->tplane_cap;
+    uint8_t *cert = w->cert;
+    size_t cert_cap = w->cert_cap;
+    float *newcone = w->newcone;
+    size_t newcone_cap = w->newcone_cap;
+    memcpy(w, S, offsetof(simp, vstars));
+    w->phase = S->phase;
+    w->fast = S->fast;
+    w->vlock = S->vlock;
+    w->vbest = S->vbest;
+    w->ekey = S->ekey;
+    w->pass = S->pass;
+    w->nthreads = 1;
+    w->par = 0;
+    w->slab_ax = S->slab_ax;
+    w->slab = S->slab;
+    w->slab_w = S->slab_w;
+    w->slab_shift = S->slab_shift;
+    w->log = S->log;
+    w->collapses = S->collapses;
+    w->prephase = S->prephase;
+    w->swept = 0;
+    memset(w->rejected, 0, sizeof w->rejected);
+    w->oom = 0;
+    w->cancelled = 0;
+    w->R = R;
+    w->ebuf = ebuf;
+    w->ebuf_cap = ebuf_cap;
+    w->pbuf = pbuf;
+    w->pbuf_cap = pbuf_cap;
+    w->pdst = pdst;
+    w->pdst_cap = pdst_cap;
+    w->tbox = tbox;
+    w->tbox_cap = tbox_cap;
+    w->tplane = tplane;
+    w->tplane_cap = tplane_cap;
+    w->cert = cert;
+    w->cert_cap = cert_cap;
+    w->newcone = newcone;
+    w->newcone_cap = newcone_cap;
+}
+
 static void simp_free(simp *S) {
     free(S->slot_of);
     free(S->pos);
@@ -1576,24 +1695,13 @@ static void simp_free(simp *S) {
     free(S->ev);
     free(S->enf);
     free(S->eflag);
+    free(S->estate);
     free(S->emark);
     free(S->ehint);
     free(S->eopt);
     fl_heap_free(&S->heap);
     fl_grid_free(&S->grid);
-    free(S->R.face);
-    free(S->R.a);
-    free(S->R.b);
-    free(S->R.from_j);
-    free(S->R.lab);
-    free(S->R.lab2);
-    free(S->ebuf);
-    free(S->pbuf);
-    free(S->pdst);
-    free(S->newcone);
-    free(S->tbox);
-    free(S->tplane);
-    free(S->cert);
+    simp_free_scratch(S);
 }
 
 static int bad_number(double x) { return isnan(x) || isinf(x); }
@@ -1618,6 +1726,13 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
     if (bad_number(o->fast_above) || (o->fast_above > 0.0 && o->fast_above < 1.0))
         return fl_error(err, FEMLOD_EINPUT, "simplify: fast_above %g is not a factor >= 1", o->fast_above);
     S->fast = o->fast_above >= 1.0 ? o->fast_above : 0.0;
+    if (o->threads < 0) return fl_error(err, FEMLOD_EINPUT, "simplify: threads %d is negative", o->threads);
+    S->nthreads = o->threads;
+    if (S->nthreads == 0) {
+        long np = sysconf(_SC_NPROCESSORS_ONLN);
+        S->nthreads = np < 1 ? 1 : (np > 16 ? 16 : (int)np);
+    }
+    if (S->nthreads > 16) S->nthreads = 16;
     S->target = o->target;
     if (o->ratio > 0.0) S->target = (size_t)floor(o->ratio * (double)nt + 0.5);
 
@@ -1869,7 +1984,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     if (ev2) S->ev = ev2;
     uint16_t *enf2 = fl_realloc(S->enf, ne + 1, sizeof *enf2);
     if (enf2) S->enf = enf2;
-    if (!CALLOC(S->eflag, ne + 1) || !CALLOC(S->emark, ne + 1) || !ALLOC(S->eopt, 3 * ne + 3) ||
+    if (!CALLOC(S->eflag, ne + 1) || !CALLOC(S->estate, ne + 1) || !CALLOC(S->emark, ne + 1) || !ALLOC(S->eopt, 3 * ne + 3) ||
         (FEMLOD_SIMPLIFY_BOUND && !ALLOC(S->ehint, 2 * ne + 2)))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     if (FEMLOD_SIMPLIFY_BOUND) memset(S->ehint, 0xff, (2 * ne + 2) * sizeof *S->ehint);
@@ -2103,12 +2218,69 @@ static int run_queue(simp *S, const femlod_simplify_options *o, size_t live0, si
 #define FEMLOD_SIMPLIFY_BAND 0.9 /* each pass lowers the threshold by this factor */
 #endif
 
+static int u32vec_push(u32vec *a, uint32_t x) {
+    if (a->n == a->cap && !buf_reserve((void **)&a->v, &a->cap, a->n + 1, sizeof *a->v)) return 0;
+    a->v[a->n++] = x;
+    return 1;
+}
+
+/* The worker's rules (docs/design.md "Parallel fast passes"). To visit v,
+ * every neighbour must be in the worker's slab or in a slab of the other
+ * colour (idle in this sub-pass): their data then changes only by this
+ * worker or not at all. */
+static int par_star_readable(const simp *S, uint32_t v) {
+    const uint32_t *fl = S->refs + S->fstart[v];
+    for (uint32_t m = 0; m < S->fcount[v]; m++) {
+        const uint32_t *t = S->tri + 3 * (size_t)fl[m];
+        for (int c = 0; c < 3; c++) {
+            if (t[c] == v) continue;
+            uint32_t sl = slab_of(S, P(S, t[c]));
+            if (sl != S->slab && ((sl ^ S->slab) & 1u) == 0) return 0;
+        }
+    }
+    return 1;
+}
+
+/* To collapse the gathered edge: i, j and every neighbour of theirs in the
+ * slab (so every face and edge it writes has all its corners there), room
+ * in the worker's face-list slice and triangle budget. */
+static int par_ring_owned(const simp *S, const ring *R) {
+    if (slab_of(S, P(S, R->i)) != S->slab || slab_of(S, P(S, R->j)) != S->slab) return 0;
+    for (size_t r = 0; r < R->n; r++)
+        if (slab_of(S, P(S, R->a[r])) != S->slab || slab_of(S, P(S, R->b[r])) != S->slab) return 0;
+    for (size_t x = 0; x < R->ns; x++)
+        if (slab_of(S, P(S, R->sopp[x])) != S->slab) return 0;
+    if (S->nrefs + R->n > S->caprefs) return 0;
+    return S->live_start - S->live + R->ns <= S->live_budget;
+}
+
+/* To move k to p: p in the slab (a vertex never leaves its slab) and
+ * enough blocks in the worker's pool for the new faces' grid cells. */
+static int par_candidate_ok(const simp *S, const ring *R, const double p[3]) {
+    if (slab_of(S, p) != S->slab) return 0;
+    size_t need = 0;
+    for (size_t r = 0; r < R->n; r++) {
+        const double *a = P(S, R->a[r]), *b = P(S, R->b[r]);
+        double lo[3], hi[3];
+        int c0[3], c1[3];
+        for (int k = 0; k < 3; k++) {
+            lo[k] = mn(p[k], mn(a[k], b[k]));
+            hi[k] = mx(p[k], mx(a[k], b[k]));
+        }
+        fl_grid_range(&S->grid, lo, hi, c0, c1);
+        need += (size_t)(c1[0] - c0[0] + 1) * (size_t)(c1[1] - c0[1] + 1) * (size_t)(c1[2] - c0[2] + 1);
+    }
+    return need <= S->grid.nfree;
+}
+
 /* One visit of slot v in a pass with threshold tau: evaluates v's edges
  * whose key is out of date, then tries v's best edge if it reaches tau and
  * its other end is not locked in this pass. Returns 1 collapsed, 0 not, -1
- * on ENOMEM. */
+ * on ENOMEM, 2 deferred (a worker, S->par: the collapse would leave its
+ * slab). */
 static int band_vertex(simp *S, uint32_t v, double tau) {
     ring *R = &S->R;
+    if (S->par && !par_star_readable(S, v)) return 2;
     uint32_t em = next_stamp(S);
     uint32_t best = UINT32_MAX;
     float bkey = -1.0f, vb = -1.0f;
@@ -2123,11 +2295,11 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
             if (S->emark[ed] == em) continue;
             S->emark[ed] = em;
             if (S->eflag[ed] & E_DEAD) continue;
-            if (S->eflag[ed] & E_STALE) {
+            if (S->estate[ed] & E_STALE) {
                 double rho = evaluate(S, R, ed);
                 if (S->oom) return -1;
                 S->ekey[ed] = rho < 0.0 ? -1.0f : (float)rho;
-                S->eflag[ed] &= (uint8_t)~E_STALE;
+                S->estate[ed] &= (uint8_t)~E_STALE;
             }
             float key = S->ekey[ed];
             if (key > vb) vb = key;
@@ -2145,12 +2317,15 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
     double rho = evaluate(S, R, best);
     if (S->oom) return -1;
     S->ekey[best] = rho < 0.0 ? -1.0f : (float)rho;
+    if (S->par && rho >= tau && !par_ring_owned(S, R)) return 2;
     int chosen = -1;
     if (rho >= tau && link_check(S, R) == NO_REASON) {
         for (int c = 0; c < R->ncand && chosen < 0; c++) {
             if (!R->ok[c] || R->rho[c] < tau) continue;
+            if (S->par && !par_candidate_ok(S, R, R->cand[c])) return 2;
             int w = expensive_checks(S, R, c);
             if (S->oom) return -1;
+            if (w == DEFER_REASON) return 2;
             if (w == NO_REASON) chosen = c;
             else S->rejected[w]++;
         }
@@ -2176,6 +2351,7 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
     }
     uint32_t k = R->i;
     if (!collapse(S, R, chosen)) return -1;
+    if (S->par && !u32vec_push(S->klist, k)) return -1;
     S->swept++;
     /* k's edges have a new endpoint: out of date; the edges around keep
      * their keys (docs/simplify.md says what that costs); k and its ring
@@ -2194,12 +2370,382 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
                  * the lazy queue, FEMLOD_SIMPLIFY_BOUND, is not used there);
                  * the cached optimum is gone with the endpoint */
                 uint32_t ed = S->tedge[3 * (size_t)f + c];
-                S->eflag[ed] = (uint8_t)((S->eflag[ed] | E_STALE) & ~E_OPT);
+                S->estate[ed] = (uint8_t)((S->estate[ed] | E_STALE) & ~E_OPT);
             }
         }
     }
     return 1;
 }
+
+/* {====== parallel fast passes (docs/design.md "Parallel fast passes")
+ *
+ * A pass runs in two stages of sub-passes, then a sequential remainder.
+ * The grid's longest axis is cut into slabs of slab_w cells; in a sub-pass
+ * the slabs of one colour (parity) are tasks, done in any order by any
+ * thread, each visiting its vertices in slot order under the worker's rules
+ * (par_star_readable, par_ring_owned, par_candidate_ok and the cell range
+ * of intersect_check); a visit they forbid is deferred. Stage 1 visits
+ * stage 0's deferred vertices in slabs shifted by half a slab, where most
+ * lie far from a border; what it defers is visited sequentially. Each
+ * task's collapses get provisional node ids and a log of their own; both
+ * are merged in slab order. So the result depends on the slabs, never on
+ * the threads. */
+
+#define PAR_SLAB_CELLS 16   /* least slab width, in grid cells */
+#define PAR_MAX_SLABS 64    /* slabs along the axis at most (wider slabs beyond) */
+#define PAR_MIN_LEFT 4096   /* triangles above the floor below which a pass runs sequentially */
+#define PAR_CHUNK 16384     /* edges per task of the first evaluation */
+
+typedef struct par_task {
+    uint32_t slab;
+    size_t lo, hi;           /* its vertices: the stage list [lo, hi) */
+    size_t refs_lo, refs_hi; /* its slice of the face-list arena */
+    uint32_t blocks;         /* its pool of grid blocks */
+    size_t nblocks;
+    size_t budget;           /* triangles it may remove */
+    femlod_collapse_log *log;
+    u32vec klist, deferred;
+    /* what it did */
+    size_t collapses, removed, swept, done, refs_end;
+    size_t rejected[FEMLOD_REJECT_COUNT];
+    uint32_t stamp, fstamp;
+    int oom;
+} par_task;
+
+typedef struct par_worker {
+    simp W; /* its view of the run, with its own scratch */
+    struct par_ctx *X;
+    pthread_t th;
+} par_worker;
+
+typedef struct par_ctx {
+    simp *S;
+    par_worker *wk;
+    int nw;
+    par_task *task;
+    size_t ntask, captask;
+    u32vec list[2];  /* the stage's vertices, bucketed by slab */
+    u32vec tmp;
+    uint32_t *count; /* per slab */
+    size_t capcount;
+    double tau;
+    /* the running sub-pass */
+    void (*fn)(struct par_ctx *, par_worker *, size_t);
+    size_t nrun;
+    atomic_size_t next;
+} par_ctx;
+
+static void *par_thread(void *arg) {
+    par_worker *w = arg;
+    par_ctx *X = w->X;
+    for (;;) {
+        size_t k = atomic_fetch_add(&X->next, 1);
+        if (k >= X->nrun) break;
+        X->fn(X, w, k);
+    }
+    return NULL;
+}
+
+/* Runs fn(X, worker, k) for k < n on up to nw threads (this one included).
+ * A thread that cannot start leaves its share to the others. */
+static void par_for(par_ctx *X, size_t n, void (*fn)(par_ctx *, par_worker *, size_t)) {
+    X->fn = fn;
+    X->nrun = n;
+    atomic_store(&X->next, 0);
+    int nt = X->nw;
+    if ((size_t)nt > n) nt = n ? (int)n : 1;
+    int started[16] = {0};
+    for (int t = 1; t < nt; t++) started[t] = pthread_create(&X->wk[t].th, NULL, par_thread, &X->wk[t]) == 0;
+    par_thread(&X->wk[0]);
+    for (int t = 1; t < nt; t++)
+        if (started[t]) pthread_join(X->wk[t].th, NULL);
+}
+
+static void par_free(par_ctx *X) {
+    for (int t = 0; t < X->nw; t++) simp_free_scratch(&X->wk[t].W);
+    free(X->wk);
+    for (size_t k = 0; k < X->captask; k++) {
+        femlod_collapse_log_free(X->task[k].log);
+        free(X->task[k].klist.v);
+        free(X->task[k].deferred.v);
+    }
+    free(X->task);
+    free(X->list[0].v);
+    free(X->list[1].v);
+    free(X->tmp.v);
+    free(X->count);
+}
+
+/* The first evaluation of the passes, chunk k of the edges: every edge is
+ * evaluated on its own (evaluate writes only the edge's cached optimum). */
+static void par_eval_chunk(par_ctx *X, par_worker *w, size_t k) {
+    simp *S = X->S, *W = &w->W;
+    size_t e0 = k * PAR_CHUNK, e1 = e0 + PAR_CHUNK < S->ne ? e0 + PAR_CHUNK : S->ne;
+    for (size_t ed = e0; ed < e1 && !W->oom; ed++) {
+        float key = -1.0f;
+        if (!(S->eflag[ed] & E_DEAD)) {
+            double rho = evaluate(W, &W->R, (uint32_t)ed);
+            if (rho >= 0.0) key = (float)rho;
+        }
+        S->ekey[ed] = key;
+    }
+}
+
+/* One task: slab t's vertices of the stage list, in order. */
+static void par_run_task(par_ctx *X, par_worker *w, size_t k) {
+    simp *S = X->S, *W = &w->W;
+    par_task *t = X->task + k;
+    const uint32_t *list = X->list[0].v;
+    simp_view(W, S);
+    W->par = 1;
+    W->slab = t->slab;
+    W->nrefs = t->refs_lo;
+    W->caprefs = t->refs_hi;
+    W->grid.free_block = t->blocks;
+    W->grid.nfree = t->nblocks;
+    W->grid.fixed = 1;
+    W->grid_live = 0; /* no grid rebuild in a worker */
+    W->log = t->log;
+    W->live_start = S->live;
+    W->live_budget = t->budget;
+    W->klist = &t->klist;
+    t->klist.n = 0;
+    t->deferred.n = 0;
+    size_t done = 0;
+    float ftau = (float)X->tau;
+    for (size_t x = t->lo; x < t->hi && !W->oom; x++) {
+        uint32_t v = list[x];
+        if ((W->vflag[v] & V_DEAD) || !W->fcount[v]) continue;
+        if (W->vlock[v] == W->pass || !(W->vbest[v] >= ftau)) continue;
+        int c = band_vertex(W, v, X->tau);
+        if (c < 0) W->oom = 1;
+        else if (c == 1) done++;
+        else if (c == 2 && !u32vec_push(&t->deferred, v)) W->oom = 1;
+    }
+    t->collapses = W->collapses - S->collapses;
+    t->removed = S->live - W->live;
+    t->swept = W->swept;
+    t->done = done;
+    t->refs_end = W->nrefs;
+    t->blocks = W->grid.free_block;
+    t->nblocks = W->grid.nfree;
+    memcpy(t->rejected, W->rejected, sizeof t->rejected);
+    t->stamp = W->stamp;
+    t->fstamp = W->fstamp;
+    t->oom = W->oom;
+}
+
+/* Buckets the vertices of `in` by slab (stable: slot order within a slab)
+ * into X->list[0] and makes one task per non-empty slab of colour `col`
+ * later; returns the slab count, 0 on ENOMEM. */
+static size_t par_bucket(par_ctx *X, const u32vec *in) {
+    simp *S = X->S;
+    size_t ncell = (size_t)S->grid.n[S->slab_ax];
+    size_t nslab = (ncell + S->slab_shift) / S->slab_w + 1;
+    if (!buf_reserve((void **)&X->count, &X->capcount, nslab + 1, sizeof *X->count) ||
+        !buf_reserve((void **)&X->list[0].v, &X->list[0].cap, in->n + 1, sizeof *X->list[0].v) ||
+        !buf_reserve((void **)&X->list[1].v, &X->list[1].cap, in->n + 1, sizeof *X->list[1].v))
+        return 0;
+    memset(X->count, 0, (nslab + 1) * sizeof *X->count);
+    for (size_t x = 0; x < in->n; x++) {
+        uint32_t v = in->v[x];
+        uint32_t sl = slab_of(S, P(S, v));
+        X->list[1].v[x] = sl;
+        X->count[sl + 1]++;
+    }
+    for (size_t sl = 0; sl < nslab; sl++) X->count[sl + 1] += X->count[sl];
+    /* count[sl] = start of slab sl; scatter */
+    for (size_t x = 0; x < in->n; x++) X->list[0].v[X->count[X->list[1].v[x]]++] = in->v[x];
+    /* count[sl] = end of slab sl now */
+    X->list[0].n = in->n;
+    return nslab;
+}
+
+/* Prepares the tasks of the slabs of colour col (stage list in X->list[0],
+ * slab ends in X->count): face-list slices, block pools, triangle budgets,
+ * logs. Returns the task count, (size_t)-1 on ENOMEM. */
+static size_t par_tasks(par_ctx *X, size_t nslab, unsigned col, size_t floor_live) {
+    simp *S = X->S;
+    size_t n = 0, total = 0;
+    for (size_t sl = col; sl < nslab; sl += 2) {
+        size_t lo = sl ? X->count[sl - 1] : 0, hi = X->count[sl];
+        if (hi == lo) continue;
+        if (n == X->captask) {
+            size_t cap = X->captask ? 2 * X->captask : 32;
+            par_task *nt = fl_realloc(X->task, cap, sizeof *nt);
+            if (!nt) return (size_t)-1;
+            memset(nt + X->captask, 0, (cap - X->captask) * sizeof *nt);
+            X->task = nt;
+            X->captask = cap;
+        }
+        par_task *t = X->task + n++;
+        t->slab = (uint32_t)sl;
+        t->lo = lo;
+        t->hi = hi;
+        total += hi - lo;
+    }
+    if (!n) return 0;
+    /* stamps: room for every task's values without a wrap-around clear */
+    if (S->stamp > 0x7FFFFFFFu) {
+        memset(S->vmark, 0, S->nv * sizeof *S->vmark);
+        memset(S->emark, 0, S->ne * sizeof *S->emark);
+        S->stamp = 0;
+    }
+    if (S->fstamp > 0x7FFFFFFFu) {
+        memset(S->fmark, 0, S->nt * sizeof *S->fmark);
+        S->fstamp = 0;
+    }
+    /* face lists: a slice per task, enough for a collapse per two visits */
+    size_t need = 0;
+    for (size_t k = 0; k < n; k++) need += 8 * (X->task[k].hi - X->task[k].lo) + 256;
+    if (S->nrefs + need > S->caprefs) {
+        if (!compact_refs(S)) return (size_t)-1;
+        if (S->nrefs + need > S->caprefs) {
+            size_t cap = S->nrefs + 2 * need;
+            uint32_t *nr = fl_realloc(S->refs, cap, sizeof *nr);
+            if (!nr) return (size_t)-1;
+            S->refs = nr;
+            S->caprefs = cap;
+        }
+    }
+    size_t at = S->nrefs, left = S->live > floor_live ? S->live - floor_live : 0;
+    for (size_t k = 0; k < n; k++) {
+        par_task *t = X->task + k;
+        size_t len = t->hi - t->lo;
+        t->refs_lo = at;
+        at += 8 * len + 256;
+        t->refs_hi = at;
+        t->budget = (size_t)((double)left * (double)len / (double)total);
+        t->nblocks = 256 + len / 2;
+        if (!fl_grid_take(&S->grid, t->nblocks, &t->blocks)) return (size_t)-1;
+        if (S->log && !t->log && !(t->log = fl_log_new(S->nv, 64))) return (size_t)-1;
+    }
+    return n;
+}
+
+/* Folds the tasks' work into the run, in slab order: node ids and logs
+ * renumbered, counters summed, pools and slices given back, deferred
+ * vertices appended to out. Returns the collapses, (size_t)-1 on ENOMEM. */
+static size_t par_merge(par_ctx *X, size_t n, u32vec *out) {
+    simp *S = X->S;
+    uint32_t base = (uint32_t)(S->nv + S->collapses);
+    size_t offset = 0, done = 0;
+    int oom = 0;
+    for (size_t k = 0; k < n; k++) {
+        par_task *t = X->task + k;
+        oom |= t->oom;
+        for (size_t m = 0; m < t->klist.n; m++) S->node[t->klist.v[m]] += (uint32_t)offset;
+        if (S->log && !oom) {
+            if (!fl_log_merge(S->log, t->log, base, (uint32_t)offset)) oom = 1;
+            fl_log_clear(t->log);
+        }
+        for (int r = 0; r < FEMLOD_REJECT_COUNT; r++) S->rejected[r] += t->rejected[r];
+        S->swept += t->swept;
+        S->live -= t->removed;
+        offset += t->collapses;
+        done += t->done;
+        if (t->stamp > S->stamp) S->stamp = t->stamp;
+        if (t->fstamp > S->fstamp) S->fstamp = t->fstamp;
+        fl_grid_give(&S->grid, t->blocks, t->nblocks);
+        t->blocks = UINT32_MAX;
+        t->nblocks = 0;
+        for (size_t m = 0; m < t->deferred.n && !oom; m++)
+            if (!u32vec_push(out, t->deferred.v[m])) oom = 1;
+    }
+    S->collapses += offset;
+    if (n) S->nrefs = X->task[n - 1].refs_hi;
+    if (oom) {
+        S->oom = 1;
+        return (size_t)-1;
+    }
+    return done;
+}
+
+/* One pass at threshold tau in parallel; returns the collapses, (size_t)-1
+ * on ENOMEM, (size_t)-2 when cancelled. */
+static size_t band_par_pass(simp *S, par_ctx *X, double tau, size_t floor_live, const femlod_simplify_options *o,
+                            size_t live0, size_t *next) {
+    X->tau = tau;
+    float ftau = (float)tau;
+    /* slabs along the longest axis of the grid */
+    int ax = 0;
+    for (int k = 1; k < 3; k++)
+        if (S->grid.n[k] > S->grid.n[ax]) ax = k;
+    uint32_t w = (uint32_t)((S->grid.n[ax] + PAR_MAX_SLABS - 1) / PAR_MAX_SLABS);
+    if (w < PAR_SLAB_CELLS) w = PAR_SLAB_CELLS;
+    S->slab_ax = ax;
+    S->slab_w = w;
+    /* stage 0's vertices: those a visit could collapse */
+    u32vec *in = &X->tmp;
+    in->n = 0;
+    for (uint32_t v = 0; v < S->nv; v++) {
+        if ((S->vflag[v] & V_DEAD) || !S->fcount[v]) continue;
+        if (S->vlock[v] != S->pass && S->vbest[v] >= ftau && !u32vec_push(in, v)) return (size_t)-1;
+    }
+    size_t done = 0;
+    u32vec deferred = {NULL, 0, 0};
+    for (int stage = 0; stage < 2; stage++) {
+#if FEMLOD_SIMPLIFY_STATS
+        S->stats.listed[stage] += in->n;
+        double ts = now_seconds();
+#endif
+        S->slab_shift = stage ? w / 2 : 0;
+        size_t nslab = par_bucket(X, in);
+        if (!nslab) {
+            free(deferred.v);
+            return (size_t)-1;
+        }
+        deferred.n = 0;
+        for (unsigned col = 0; col < 2; col++) {
+            if (S->live <= floor_live) break;
+            size_t n = par_tasks(X, nslab, col, floor_live);
+            if (n == (size_t)-1) {
+                free(deferred.v);
+                return (size_t)-1;
+            }
+            if (!n) continue;
+            par_for(X, n, par_run_task);
+            size_t c = par_merge(X, n, &deferred);
+            if (c == (size_t)-1) {
+                free(deferred.v);
+                return (size_t)-1;
+            }
+            done += c;
+            if (progress(S, o, live0, next)) {
+                free(deferred.v);
+                return (size_t)-2;
+            }
+        }
+        STAT_TIME_ST(stage, ts);
+        /* the deferred are the next stage's vertices */
+        u32vec t = *in;
+        *in = deferred;
+        deferred = t;
+    }
+    free(deferred.v);
+#if FEMLOD_SIMPLIFY_STATS
+    S->stats.listed[2] += in->n;
+    double ts = now_seconds();
+#endif
+    /* the remainder, one by one as the sequential passes do */
+    for (size_t x = 0; x < in->n && S->live > floor_live; x++) {
+        uint32_t v = in->v[x];
+        if ((S->vflag[v] & V_DEAD) || !S->fcount[v]) continue;
+        if (S->vlock[v] == S->pass || !(S->vbest[v] >= ftau)) continue;
+        int c = band_vertex(S, v, tau);
+        if (c < 0) return (size_t)-1;
+        if (c > 0) {
+            done++;
+            if (progress(S, o, live0, next)) return (size_t)-2;
+        }
+    }
+    STAT_TIME_ST(2, ts);
+    /* the grid follows the mesh's coarsening between passes */
+    if (S->live * 4 < S->grid_live && S->live > 64 && !build_grid(S, S->grid_h * 2.0)) return (size_t)-1;
+    return done;
+}
+
+/* }====== */
 
 /* Phase 1 in passes until at most floor_live triangles are left or no edge
  * is valid: every edge is evaluated once; then passes over the slots (in
@@ -2212,23 +2758,43 @@ static int band_run(simp *S, const femlod_simplify_options *o, size_t floor_live
     S->vbest = fl_alloc(S->nv, sizeof *S->vbest);
     S->ekey = fl_alloc(S->ne, sizeof *S->ekey);
     if (!S->vlock || !S->vbest || !S->ekey) return 0;
+    par_ctx X;
+    memset(&X, 0, sizeof X);
+    X.S = S;
+    X.nw = S->nthreads < 1 ? 1 : (S->nthreads > 16 ? 16 : S->nthreads);
+    X.wk = fl_calloc((size_t)X.nw, sizeof *X.wk);
+    if (!X.wk) return 0;
+    for (int t = 0; t < X.nw; t++) X.wk[t].X = &X;
+    int ret = 0;
     for (size_t v = 0; v < S->nv; v++) S->vbest[v] = -1.0f;
+#if FEMLOD_SIMPLIFY_STATS
+    double t2 = now_seconds();
+#endif
+    /* every edge evaluated once, in parallel chunks */
+    if (o->progress && o->progress(o->progress_payload, 0.0)) {
+        ret = 2;
+        goto done;
+    }
+    for (int t = 0; t < X.nw; t++) simp_view(&X.wk[t].W, S);
+    par_for(&X, (S->ne + PAR_CHUNK - 1) / PAR_CHUNK, par_eval_chunk);
+    for (int t = 0; t < X.nw; t++) {
+        const simp *W = &X.wk[t].W;
+        if (W->oom) goto done;
+        for (int r = 0; r < FEMLOD_REJECT_COUNT; r++) S->rejected[r] += W->rejected[r];
+    }
     float top = -1.0f;
     for (size_t ed = 0; ed < S->ne; ed++) {
-        if (o->progress && (ed & 0xFFFFu) == 0xFFFFu && o->progress(o->progress_payload, 0.0)) return 2;
-        float key = -1.0f;
-        if (!(S->eflag[ed] & E_DEAD)) {
-            double rho = evaluate(S, &S->R, (uint32_t)ed);
-            if (S->oom) return 0;
-            if (rho >= 0.0) key = (float)rho;
-        }
-        S->ekey[ed] = key;
+        float key = S->ekey[ed];
         uint32_t a = S->ev[2 * ed], b = S->ev[2 * ed + 1];
         if (key > S->vbest[a]) S->vbest[a] = key;
         if (key > S->vbest[b]) S->vbest[b] = key;
         if (key > top) top = key;
     }
     double tau = (double)top * FEMLOD_SIMPLIFY_BAND;
+    STAT_TIME(2, t2);
+#if FEMLOD_SIMPLIFY_STATS
+    double t3 = now_seconds();
+#endif
     while (top >= 0.0f && S->live > floor_live) {
         if (++S->pass == 0) { /* wrapped: unlock all */
             memset(S->vlock, 0, S->nv * sizeof *S->vlock);
@@ -2236,20 +2802,36 @@ static int band_run(simp *S, const femlod_simplify_options *o, size_t floor_live
         }
         size_t done = 0;
         top = -1.0f; /* the best key left below tau */
-        for (uint32_t v = 0; v < S->nv && S->live > floor_live; v++) {
-            if ((S->vflag[v] & V_DEAD) || !S->fcount[v]) continue;
-            if (S->vlock[v] != S->pass && S->vbest[v] >= (float)tau) {
-                int c = band_vertex(S, v, tau);
-                if (c < 0) return 0;
-                if (c > 0) {
-                    done++;
-                    if (progress(S, o, live0, next)) return 2;
-                    continue;
-                }
+        if (S->live - floor_live >= PAR_MIN_LEFT) {
+            size_t c = band_par_pass(S, &X, tau, floor_live, o, live0, next);
+            if (c == (size_t)-1) goto done;
+            if (c == (size_t)-2) {
+                ret = 2;
+                goto done;
             }
-            if (S->vbest[v] > top && S->vbest[v] < FLT_MAX) top = S->vbest[v];
+            done = c;
+            for (uint32_t v = 0; v < S->nv && !done; v++)
+                if (!(S->vflag[v] & V_DEAD) && S->fcount[v] && S->vbest[v] > top && S->vbest[v] < FLT_MAX)
+                    top = S->vbest[v];
+        } else {
+            for (uint32_t v = 0; v < S->nv && S->live > floor_live; v++) {
+                if ((S->vflag[v] & V_DEAD) || !S->fcount[v]) continue;
+                if (S->vlock[v] != S->pass && S->vbest[v] >= (float)tau) {
+                    int c = band_vertex(S, v, tau);
+                    if (c < 0) goto done;
+                    if (c > 0) {
+                        done++;
+                        if (progress(S, o, live0, next)) {
+                            ret = 2;
+                            goto done;
+                        }
+                        continue;
+                    }
+                }
+                if (S->vbest[v] > top && S->vbest[v] < FLT_MAX) top = S->vbest[v];
+            }
         }
-        if (S->oom) return 0;
+        if (S->oom) goto done;
         /* next band; a pass without a collapse jumps to the best key left
          * (none left: done) */
         if (done) {
@@ -2259,15 +2841,19 @@ static int band_run(simp *S, const femlod_simplify_options *o, size_t floor_live
             tau = mn(tau * FEMLOD_SIMPLIFY_BAND, (double)top);
         }
     }
+    STAT_TIME(3, t3);
     /* back to the queue's conventions */
-    for (size_t ed = 0; ed < S->ne; ed++) S->eflag[ed] &= (uint8_t)~E_STALE;
+    for (size_t ed = 0; ed < S->ne; ed++) S->estate[ed] &= (uint8_t)~E_STALE;
     free(S->vlock);
     free(S->vbest);
     free(S->ekey);
     S->vlock = NULL;
     S->vbest = NULL;
     S->ekey = NULL;
-    return 1;
+    ret = 1;
+done:
+    par_free(&X);
+    return ret;
 }
 
 /* }====== */
@@ -2276,6 +2862,9 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
     size_t live0 = S->live, next = 0;
     *why = FEMLOD_STOP_NO_VALID_EDGE;
     /* pre-phase (4.2.2): only edges of triangles below min_stretch */
+#if FEMLOD_SIMPLIFY_STATS
+    double t1 = now_seconds();
+#endif
     if (S->st_on) {
         S->phase = 0;
         S->lim_st2 = -1.0; /* the pre-phase compares with the replaced faces instead */
@@ -2293,6 +2882,7 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
         }
         while (fl_heap_size(&S->heap)) fl_heap_pop(&S->heap, NULL);
     }
+    STAT_TIME(1, t1);
     S->phase = 1;
     S->lim_st2 = S->st_on ? S->minst2 : -1.0;
     if (S->fast > 0.0) {
@@ -2306,6 +2896,9 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
             }
         }
     }
+#if FEMLOD_SIMPLIFY_STATS
+    double t4 = now_seconds();
+#endif
     size_t last_retry = (size_t)-1;
     for (;;) {
         if (S->live <= S->target) break;
@@ -2330,6 +2923,7 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
         }
     }
     if (S->live <= S->target) *why = FEMLOD_STOP_TARGET;
+    STAT_TIME(4, t4);
     return 1;
 }
 
@@ -2428,6 +3022,7 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
     if (!S) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     size_t dropped = 0;
     femlod_status st = setup(S, mesh, o, &dropped, err);
+    STAT_TIME(0, t0);
     if (st != FEMLOD_OK) {
         simp_free(S);
         free(S);
@@ -2444,6 +3039,8 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
     femlod_stop_reason why = FEMLOD_STOP_NO_VALID_EDGE;
     int r = simplify_run(S, o, &why);
     femlod_mesh *m = NULL;
+    double t5 = now_seconds();
+    (void)t5;
     if (r == 0 || make_output(S, &m, S->log) != FEMLOD_OK) {
         femlod_collapse_log_free(S->log);
         simp_free(S);
@@ -2452,6 +3049,11 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
     }
     if (S->log) S->log->prephase = S->prephase;
 #if FEMLOD_SIMPLIFY_STATS
+    STAT_TIME(5, t5);
+    fprintf(stderr, "simplify seconds: setup %.3f pre-phase %.3f first evaluation %.3f passes %.3f queue %.3f output %.3f\n",
+            S->stats.t[0], S->stats.t[1], S->stats.t[2], S->stats.t[3], S->stats.t[4], S->stats.t[5]);
+    fprintf(stderr, "parallel passes: listed %zu / %zu / %zu, seconds %.3f / %.3f / %.3f\n", S->stats.listed[0],
+            S->stats.listed[1], S->stats.listed[2], S->stats.tstage[0], S->stats.tstage[1], S->stats.tstage[2]);
     {
         const simp_stats *c = &S->stats;
         double n = S->collapses ? (double)S->collapses : 1.0;
@@ -2492,6 +3094,7 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
         result->max_normal_change = S->cone_on ? S->max_nc : FEMLOD_SIMPLIFY_OFF;
         result->max_valence = S->val_on ? S->maxval : -1;
         result->fast_above = S->fast > 0.0 ? S->fast : FEMLOD_SIMPLIFY_OFF;
+        result->threads = S->fast > 0.0 ? S->nthreads : 1;
         result->seconds = now_seconds() - t0;
     }
     *out = m;

@@ -92,6 +92,26 @@ int fl_log_add(femlod_collapse_log *log, uint32_t i, uint32_t j, const double po
     return 1;
 }
 
+int fl_log_merge(femlod_collapse_log *dst, const femlod_collapse_log *src, uint32_t from, uint32_t shift) {
+    uint32_t vs[256];
+    for (size_t c = 0; c < src->n; c++) {
+        size_t v0 = src->vstar_start[c], nvs = src->vstar_start[c + 1] - v0;
+        size_t f0 = src->face_start[c], nf = src->face_start[c + 1] - f0;
+        if (nvs > sizeof vs / sizeof vs[0]) return 0;
+        for (size_t k = 0; k < nvs; k++) {
+            uint32_t id = src->vstars[v0 + k];
+            vs[k] = id >= from ? id + shift : id;
+        }
+        uint32_t i = src->pair[2 * c], j = src->pair[2 * c + 1];
+        if (!fl_log_add(dst, i >= from ? i + shift : i, j >= from ? j + shift : j, src->pos + 3 * c, src->e_size[c],
+                        vs, nvs, src->faces + 3 * f0, nf))
+            return 0;
+    }
+    return 1;
+}
+
+void fl_log_clear(femlod_collapse_log *log) { log->n = 0; }
+
 void femlod_collapse_log_free(femlod_collapse_log *log) {
     if (!log) return;
     free(log->pair);

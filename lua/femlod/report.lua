@@ -191,7 +191,8 @@ function M.stats(s)
   return concat({
     format("stop: %s; %s (%d in the pre-phase%s) in %.3f s", s.stop_reason,
       plural(s.collapses, "collapse"), s.prephase_collapses,
-      (s.fast_collapses or 0) > 0 and format(", %d in fast passes", s.fast_collapses) or "",
+      (s.fast_collapses or 0) > 0 and format(", %d in fast passes on %s", s.fast_collapses,
+        plural(s.threads or 1, "thread")) or "",
       s.seconds),
     "rejected: " .. concat(rej, ", "),
     format("violating input: %s; dropped degenerate: %d", plural(s.violating_input, "triangle"),

@@ -68,6 +68,8 @@ static void usage_text(FILE *f) {
           "                   (each of these also takes 'off')\n"
           "                   --keep-boundary  --area-weighted  --lock I,J,K\n"
           "                   --fast-above F  (fast passes down to F x target)\n"
+          "                   --threads N  (for the fast passes; 0: all processors;\n"
+          "                   the output does not depend on it)\n"
           "                   --hierarchy PART.flh  (also write the vertex hierarchy)\n"
           "                   or as pairs: target=3000 min_stretch=0.3 lock=4,9\n"
           "  lod PART.flh OUT --size T\n"
@@ -759,6 +761,7 @@ static const simplify_opt simplify_opts[] = {
     {"--keep-boundary", "keep_boundary", OPT_SWITCH},
     {"--area-weighted", "area_weighted", OPT_SWITCH},
     {"--fast-above", "fast_above", OPT_THRESHOLD},
+    {"--threads", "threads", OPT_NUMBER},
     {"--lock", "lock", OPT_LOCK},
     {"--hierarchy", "hierarchy", OPT_PATH}, /* not a simplify option: the .flh to write */
 };
@@ -766,7 +769,7 @@ static const simplify_opt simplify_opts[] = {
 
 static const char SIMPLIFY_KEYS[] = "target, ratio, tolerance, max_deviation, min_stretch, "
                                     "max_size, max_valence, feature_angle, feature_weight, "
-                                    "max_normal_change, keep_boundary, area_weighted, fast_above, lock, "
+                                    "max_normal_change, keep_boundary, area_weighted, fast_above, threads, lock, "
                                     "hierarchy";
 
 /* Pushes the list "I,J,K" as a table of integers (range checked later,

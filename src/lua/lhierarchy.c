@@ -51,7 +51,7 @@ static const char *const simplify_keys[] = {
     "target",         "ratio",          "tolerance",         "max_deviation",
     "min_stretch",    "max_size",       "max_valence",       "feature_angle",
     "feature_weight", "max_normal_change", "keep_boundary",  "area_weighted",
-    "fast_above",          "lock",           "progress",       NULL};
+    "fast_above",          "threads",        "lock",           "progress",       NULL};
 
 /* The thresholds of type double that `false` switches off, in the order of
  * femlod_simplify_options; max is the largest value allowed. */
@@ -158,6 +158,16 @@ const char *fl_simplify_read_options(lua_State *L, int idx, femlod_simplify_opti
         double v = lua_tonumber(L, -1);
         if (t != LUA_TNUMBER || !(v >= 1.0 && isfinite(v))) return bad_value(L, "number >= 1 or boolean", NULL);
         o->fast_above = v;
+    }
+    lua_pop(L, 1);
+
+    *key = "threads";
+    t = lua_getfield(L, idx, "threads");
+    if (t != LUA_TNIL) {
+        int isint = 0;
+        lua_Integer n = lua_tointegerx(L, -1, &isint);
+        if (t != LUA_TNUMBER || !isint || n < 0 || n > 1024) return bad_value(L, "integer >= 0", NULL);
+        o->threads = (int)n;
     }
     lua_pop(L, 1);
 
@@ -1206,6 +1216,7 @@ static int hierarchy_stats(lua_State *L) {
     set_integer(L, "collapses", r->collapses);
     set_integer(L, "prephase_collapses", r->prephase_collapses);
     set_integer(L, "fast_collapses", r->fast_collapses);
+    set_integer(L, "threads", (size_t)r->threads);
     lua_createtable(L, 0, FEMLOD_REJECT_COUNT);
     for (int k = 0; k < FEMLOD_REJECT_COUNT; k++)
         set_integer(L, femlod_reject_name((femlod_reject)k), r->rejected[k]);

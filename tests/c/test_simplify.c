@@ -682,6 +682,24 @@ static int same_mesh(const femlod_mesh *a, const femlod_mesh *b) {
            memcmp(a->tri, b->tri, 3 * a->nt * sizeof *a->tri) == 0;
 }
 
+static int same_log(const femlod_collapse_log *la, const femlod_collapse_log *lb) {
+    size_t n = femlod_collapse_log_count(la);
+    if (n != femlod_collapse_log_count(lb)) return 0;
+    for (size_t c = 0; c < n; c++) {
+        femlod_collapse x, y;
+        femlod_collapse_log_get(la, c, &x);
+        femlod_collapse_log_get(lb, c, &y);
+        if (!(x.i == y.i && x.j == y.j && x.k == y.k && memcmp(x.position, y.position, sizeof x.position) == 0 &&
+              x.e_size == y.e_size && x.vstar_count == y.vstar_count && x.face_count == y.face_count &&
+              memcmp(x.vstars, y.vstars, x.vstar_count * sizeof *x.vstars) == 0 &&
+              memcmp(x.faces, y.faces, 3 * x.face_count) == 0))
+            return 0;
+    }
+    size_t na = 0, nb = 0;
+    const uint32_t *oa = femlod_collapse_log_output_nodes(la, &na), *ob = femlod_collapse_log_output_nodes(lb, &nb);
+    return na == nb && memcmp(oa, ob, na * sizeof *oa) == 0;
+}
+
 static void test_determinism(void) {
     femlod_mesh *m = load("fandisk.obj");
     if (!m) return;
@@ -694,19 +712,7 @@ static void test_determinism(void) {
     CHECK(femlod_simplify(&b, &lb, m, &o, NULL, NULL) == FEMLOD_OK);
     if (a && b) {
         CHECK(same_mesh(a, b));
-        size_t n = femlod_collapse_log_count(la);
-        CHECK(n == femlod_collapse_log_count(lb));
-        int same = 1;
-        for (size_t c = 0; c < n && c < femlod_collapse_log_count(lb) && same; c++) {
-            femlod_collapse x, y;
-            femlod_collapse_log_get(la, c, &x);
-            femlod_collapse_log_get(lb, c, &y);
-            same = x.i == y.i && x.j == y.j && memcmp(x.position, y.position, sizeof x.position) == 0 &&
-                   x.e_size == y.e_size && x.vstar_count == y.vstar_count && x.face_count == y.face_count &&
-                   memcmp(x.vstars, y.vstars, x.vstar_count * sizeof *x.vstars) == 0 &&
-                   memcmp(x.faces, y.faces, 3 * x.face_count) == 0;
-        }
-        CHECK(same);
+        CHECK(same_log(la, lb));
     }
     femlod_mesh_free(a);
     femlod_mesh_free(b);
@@ -929,6 +935,78 @@ static void test_fast_passes(void) {
     femlod_mesh_free(m);
 }
 
+/* The fast passes' threads (docs/design.md "Parallel fast passes"): the
+ * output and the log are byte-identical for 1, 2, 3 and 8 threads, and each
+ * run keeps every promise (simplify_checked). With max_deviation and locks,
+ * whose state (point lists, fixed vertices) the workers also share. */
+static void threads_case(const femlod_mesh *m, femlod_simplify_options o, const char *name) {
+    static const int counts[4] = {1, 2, 3, 8};
+    run first;
+    int have = 0;
+    for (int k = 0; k < 4; k++) {
+        o.threads = counts[k];
+        char label[96];
+        snprintf(label, sizeof label, "%s, %d threads", name, counts[k]);
+        run r;
+        if (!simplify_checked(&r, m, &o, label)) continue;
+        CHECK(r.res.threads == counts[k]);
+        CHECK(r.res.fast_collapses > 0);
+        if (!have) {
+            first = r;
+            have = 1;
+            printf("  %s: %zu triangles, %zu of %zu collapses in fast passes\n", name, r.out->nt,
+                   r.res.fast_collapses, r.res.collapses);
+            continue;
+        }
+        CHECK(same_mesh(first.out, r.out));
+        CHECK(same_log(first.log, r.log));
+        CHECK(memcmp(first.res.rejected, r.res.rejected, sizeof r.res.rejected) == 0);
+        run_free(&r);
+    }
+    if (have) run_free(&first);
+}
+
+static int lock_left(void *payload, double x, double y, double z) {
+    (void)payload;
+    (void)y;
+    (void)z;
+    return x < -0.2;
+}
+
+static void test_threads(void) {
+    femlod_mesh *m = load("fandisk.obj");
+    if (!m) return;
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = 1000;
+    o.fast_above = 1.5;
+    threads_case(m, o, "fandisk fast 1000");
+    o.max_deviation = 0.003;
+    o.lock_fn = lock_left;
+    threads_case(m, o, "fandisk fast 1000, max_deviation and locks");
+    femlod_mesh_free(m);
+    femlod_error err;
+    o = (femlod_simplify_options)FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.threads = -1;
+    m = load("fandisk.obj");
+    if (m) {
+        femlod_mesh *out = NULL;
+        CHECK(femlod_simplify(&out, NULL, m, &o, NULL, &err) == FEMLOD_EINPUT);
+        CHECK_STR_HAS(err.message, "threads -1");
+        femlod_mesh_free(m);
+    }
+    if (!heavy()) return;
+    femlod_mesh *c = load("cover.obj");
+    if (!c || femlod_mesh_subdivide(&m, c, 1, &err) != FEMLOD_OK) {
+        femlod_mesh_free(c);
+        return;
+    }
+    femlod_mesh_free(c);
+    o = paper(12000);
+    o.fast_above = 2.0;
+    threads_case(m, o, "cover subdivided once, paper 12000 fast 2");
+    femlod_mesh_free(m);
+}
+
 int main(void) {
     test_intersect_unit();
     test_options();
@@ -937,6 +1015,7 @@ int main(void) {
     test_fandisk();
     test_determinism();
     test_fast_passes();
+    test_threads();
     test_max_deviation();
     test_lock();
     test_defective();

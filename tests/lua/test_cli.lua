@@ -35,7 +35,7 @@ do
   T.eq(err, "", "--help: nothing on stderr")
   for _, want in ipairs { "^usage: femlod %[options%] COMMAND", "\n  run RECIPE%.lua ", "\n  info MESH ",
     "\n  convert IN OUT ", "\n  simplify IN OUT ", "%-%-target N | %-%-ratio R", "%-%-min%-stretch X",
-    "%-%-max%-normal%-change DEG", "%-%-keep%-boundary", "%-%-lock I,J,K", "%-%-fast%-above F", "%-%-hierarchy PART%.flh",
+    "%-%-max%-normal%-change DEG", "%-%-keep%-boundary", "%-%-lock I,J,K", "%-%-fast%-above F", "%-%-threads N", "%-%-hierarchy PART%.flh",
     "\n  lod PART%.flh OUT %-%-size T\n", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-q, %-%-quiet ", "\n  %-v, %-%-verbose ", "\n  %-%-traceback ",
     "Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded" } do
     T.check(out:find(want), "--help mentions " .. want)
@@ -437,8 +437,19 @@ do
   local out5 = path("simplified_fast.obj")
   code, text, err = run("simplify", fandisk, out5, "--target", "2000", "--fast-above", "2")
   T.eq(code, 0, "simplify --fast-above 2: " .. err)
-  T.check(text:find("\nstop: target; %d+ collapses %(0 in the pre%-phase, %d+ in fast passes%) in "),
+  T.check(text:find("\nstop: target; %d+ collapses %(0 in the pre%-phase, %d+ in fast passes on %d+ threads?%) in "),
     "--fast-above: the stop line counts the fast collapses: " .. text)
+  -- --threads: the same file whatever the count
+  local out6 = path("simplified_fast1.obj")
+  code, text, err = run("simplify", fandisk, out6, "--target", "2000", "--fast-above", "2", "--threads", "1")
+  T.eq(code, 0, "simplify --threads 1: " .. err)
+  T.check(text:find(" in fast passes on 1 thread%) in "), "--threads 1 in the stop line: " .. text)
+  code, text, err = run("simplify", fandisk, path("simplified_fast3.obj"), "--target", "2000", "--fast-above", "2",
+    "threads=3")
+  T.eq(code, 0, "simplify threads=3: " .. err)
+  T.check(text:find(" in fast passes on 3 threads%) in "), "threads=3 in the stop line: " .. text)
+  T.eq(T.readfile(out6), T.readfile(out5), "--threads 1 and the default: byte-identical files")
+  T.eq(T.readfile(path("simplified_fast3.obj")), T.readfile(out5), "threads=3 and the default: byte-identical files")
   local q5 = femlod.load(out5):quality()
   T.check(q5.triangles <= 2000 and q5.stretch_min >= 0.2 and q5.valence_max <= 12, "--fast-above keeps the thresholds")
   code, text = run("simplify", fandisk, out5, "--target", "2000", "--fast-above", "off")
@@ -472,7 +483,7 @@ do
   simplify_usage("femlod: --lock: vertex 6476 out of range (1..6475)", "--lock", "1,6476")
   simplify_usage("femlod: option given twice: 'target'", "--target", "100", "target=200")
   simplify_usage("femlod: unknown parameter 'targt' (valid: target, ratio, tolerance, max_deviation, min_stretch, "
-    .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, fast_above, lock, "
+    .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, fast_above, threads, lock, "
     .. "hierarchy)",
     "targt=100")
   simplify_usage("femlod: expected name=value, got '3000'", "--keep-boundary", "3000")

@@ -280,7 +280,15 @@ do
   local q, qe = fast:mesh():quality(), exact:mesh():quality()
   T.check(q.stretch_min >= 0.2 and q.valence_max <= 12, "fast passes keep the thresholds")
   T.check(q.stretch_avg >= qe.stretch_avg - 0.05, "fast quality near exact: " .. q.stretch_avg .. " vs " .. qe.stretch_avg)
-  T.check(report.stats(fast):find("in fast passes"), "report.stats tells the fast passes")
+  T.check(report.stats(fast):find("in fast passes on %d+ threads?%)"), "report.stats tells the fast passes")
+  -- threads: the same mesh, log and counts for any number
+  local one, three = fandisk:simplify { target = 2000, fast_above = 2, threads = 1 },
+    fandisk:simplify { target = 2000, fast_above = 2, threads = 3 }
+  T.eq(one:stats().threads, 1, "threads = 1 in the stats")
+  T.eq(three:stats().threads, 3, "threads = 3 in the stats")
+  T.eq(serial(one:mesh()), serial(fast:mesh()), "threads = 1 and the default: the same mesh")
+  T.eq(serial(three:mesh()), serial(fast:mesh()), "threads = 3 and the default: the same mesh")
+  for k, v in pairs(s.rejected) do T.eq(three:stats().rejected[k], v, "threads = 3: the same rejected." .. k) end
   T.check(not report.stats(exact):find("fast passes"), "and says nothing without them")
 end
 -- }======
@@ -290,10 +298,10 @@ local env = { m = fandisk, femlod = femlod }
 local E = "code:1: bad argument #1 to 'simplify' ("
 T.errmsg(E .. "unknown key 'targt'; valid keys: area_weighted, fast_above, feature_angle, feature_weight, "
   .. "keep_boundary, lock, max_deviation, max_normal_change, max_size, max_valence, min_stretch, "
-  .. "progress, ratio, target, tolerance)", "m:simplify { targt = 100 }", env)
+  .. "progress, ratio, target, threads, tolerance)", "m:simplify { targt = 100 }", env)
 T.errmsg(E .. "unexpected number key 1; valid keys: area_weighted, fast_above, feature_angle, feature_weight, "
   .. "keep_boundary, lock, max_deviation, max_normal_change, max_size, max_valence, min_stretch, "
-  .. "progress, ratio, target, tolerance)", "m:simplify { 100 }", env)
+  .. "progress, ratio, target, threads, tolerance)", "m:simplify { 100 }", env)
 T.errmsg(E .. "target: integer >= 1 expected, got 0)", "m:simplify { target = 0 }", env)
 T.errmsg(E .. "target: integer >= 1 expected, got 2.5)", "m:simplify { target = 2.5 }", env)
 T.errmsg(E .. "target: integer >= 1 expected, got string)", "m:simplify { target = '100' }", env)
@@ -318,6 +326,9 @@ T.errmsg(E .. "keep_boundary: boolean expected, got 1)", "m:simplify { keep_boun
 T.errmsg(E .. "area_weighted: boolean expected, got string)", "m:simplify { area_weighted = 'yes' }", env)
 T.errmsg(E .. "fast_above: number >= 1 or boolean expected, got 0.5)", "m:simplify { fast_above = 0.5 }", env)
 T.errmsg(E .. "fast_above: number >= 1 or boolean expected, got string)", "m:simplify { fast_above = '2' }", env)
+T.errmsg(E .. "threads: integer >= 0 expected, got -1)", "m:simplify { threads = -1 }", env)
+T.errmsg(E .. "threads: integer >= 0 expected, got 1.5)", "m:simplify { threads = 1.5 }", env)
+T.errmsg(E .. "threads: integer >= 0 expected, got string)", "m:simplify { threads = 'all' }", env)
 T.errmsg(E .. "lock[2]: index 6476 out of range (1..6475))", "m:simplify { lock = { 1, 6476 } }", env)
 T.errmsg(E .. "lock[1]: index 0 out of range (1..6475))", "m:simplify { lock = { 0 } }", env)
 T.errmsg(E .. "lock[2]: index 1.5 is not a valid index)", "m:simplify { lock = { 1, 1.5 } }", env)
