@@ -467,10 +467,12 @@ typedef struct femlod_simplify_options {
      * FEMLOD_SIMPLIFY_OFF: the exact order throughout (the default); a value
      * in (0, 1) fails with FEMLOD_EINPUT. */
     double fast_above;
-    /* Threads for the fast passes (docs/design.md "Parallel fast passes"):
-     * 0 (the default) as many as the machine has processors, at most 16.
-     * The result does not depend on it: every value gives byte-identical
-     * output and log. Negative fails with FEMLOD_EINPUT. */
+    /* Threads (docs/design.md "Parallel fast passes" and "The exact queue's
+     * second thread"): 0 (the default) as many as the machine has
+     * processors, at most 16; the fast passes and the full evaluations use
+     * them all, the exact queue two. The result does not depend on it:
+     * every value gives byte-identical output, log and counts. Negative
+     * fails with FEMLOD_EINPUT. */
     int threads;
     /* Input vertex indices that must keep their exact position (loads,
      * boundary conditions); out-of-range indices fail with FEMLOD_EINPUT.
@@ -537,7 +539,7 @@ typedef struct femlod_simplify_result {
         max_normal_change;
     int max_valence;
     double fast_above; /* the fast_above factor, FEMLOD_SIMPLIFY_OFF when off */
-    int threads;       /* threads the fast passes ran on (1 when they ran one, or did not run) */
+    int threads;       /* threads the run had (options.threads resolved; the exact queue uses two at most) */
 } femlod_simplify_result;
 
 /* The collapse log: every collapse in order, in a vertex numbering made for

@@ -373,12 +373,11 @@ static uint32_t new_block(fl_grid *g) {
 }
 
 int fl_grid_take(fl_grid *g, size_t n, uint32_t *head) {
-    uint32_t h = UINT32_MAX;
+    uint32_t h = *head;
     for (size_t k = 0; k < n; k++) {
         uint32_t b = new_block(g);
         if (b == UINT32_MAX) {
-            fl_grid_give(g, h, k);
-            *head = UINT32_MAX;
+            *head = h;
             return 0;
         }
         g->blocks[b].next = h;
@@ -386,15 +385,6 @@ int fl_grid_take(fl_grid *g, size_t n, uint32_t *head) {
     }
     *head = h;
     return 1;
-}
-
-void fl_grid_give(fl_grid *g, uint32_t head, size_t n) {
-    if (head == UINT32_MAX) return;
-    uint32_t t = head;
-    while (g->blocks[t].next != UINT32_MAX) t = g->blocks[t].next;
-    g->blocks[t].next = g->free_block;
-    g->free_block = head;
-    g->nfree += n;
 }
 
 int fl_grid_insert(fl_grid *g, uint32_t item, const double lo[3], const double hi[3]) {

@@ -70,12 +70,11 @@ FL_INTERNAL void fl_grid_free(fl_grid *g);
 FL_INTERNAL int fl_grid_insert(fl_grid *g, uint32_t item, const double lo[3], const double hi[3]);
 /* The box must be the one the item was inserted with. */
 FL_INTERNAL void fl_grid_remove(fl_grid *g, uint32_t item, const double lo[3], const double hi[3]);
-/* A chain of n free blocks (linked by next, UINT32_MAX-terminated) taken
- * from the free list, then new ones: a fast-pass worker's own pool
- * (simplify.c). 0 on ENOMEM, with nothing taken. */
+/* Puts n free blocks, from the free list, then new ones, at the head of
+ * the chain *head (linked by next, UINT32_MAX-terminated): a fast-pass
+ * worker's own pool (simplify.c). 0 on ENOMEM (the chain then holds what
+ * could be taken). */
 FL_INTERNAL int fl_grid_take(fl_grid *g, size_t n, uint32_t *head);
-/* Puts a chain of n free blocks back on the free list. */
-FL_INTERNAL void fl_grid_give(fl_grid *g, uint32_t head, size_t n);
 /* Cell index range [c0, c1] (inclusive) covering a box. */
 FL_INTERNAL void fl_grid_range(const fl_grid *g, const double lo[3], const double hi[3], int c0[3],
                                int c1[3]);

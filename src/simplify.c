@@ -54,6 +54,7 @@
 #include <math.h>
 #include <float.h>
 #include <pthread.h>
+#include <sched.h>
 #include <stdatomic.h>
 #include <stddef.h>
 #include <stdlib.h>
@@ -171,8 +172,8 @@ typedef struct ring {
 typedef struct simp_stats {
     size_t evals, settles, bounds, rings, cands, cand_ok, solves, pops, links, expensive, cells, items, tritri, skipped;
     double t[6]; /* seconds: setup, pre-phase, first evaluation of the passes, passes, queue, output */
-    size_t listed[3]; /* parallel passes: vertices listed in stage 0, 1, the remainder */
-    double tstage[3];
+    size_t listed[4]; /* parallel passes: vertices listed in stage 0, 1, the remainder; sub-passes */
+    double tstage[4]; /* and their seconds; [3]: in par_for */
 } simp_stats;
 
 typedef struct simp {
@@ -225,6 +226,7 @@ typedef struct simp {
     fl_heap heap;
     fl_grid grid;
     size_t grid_live; /* live faces when the grid was built */
+    uint32_t grid_gen; /* grids built so far (band_par's block pools belong to one) */
     double grid_h;
     uint32_t stamp, fstamp;
 
@@ -264,6 +266,15 @@ typedef struct simp {
     uint32_t slab, slab_w, slab_shift;
     size_t live_start, live_budget;
     u32vec *klist;
+    /* the exact queue's ring re-evaluation on two threads (ring_eval): the
+     * helper, and per listed edge what to do, its priority and C1 flag */
+    struct eval_helper *helper;
+    struct par_ctx *ectx; /* evaluate_all's threads (eval_range) */
+    size_t er0;           /* the first edge of eval_range's chunk */
+    uint32_t *rlist;
+    uint8_t *rkind, *rtol;
+    double *rrho;
+    size_t rlist_cap, rkind_cap, rtol_cap, rrho_cap;
     femlod_collapse_log *log;
     size_t collapses, prephase;
     size_t rejected[FEMLOD_REJECT_COUNT];
@@ -1327,6 +1338,7 @@ static int build_grid(simp *S, double h) {
         for (int k = 0; k < 3; k++) lo[k] = hi[k] = 0.0;
     }
     fl_grid_free(&S->grid);
+    S->grid_gen++;
     if (!fl_grid_init(&S->grid, lo, hi, h, 2 * S->live + 4096)) return 0;
     S->grid_h = S->grid.h;
     S->grid_live = S->live;
@@ -1480,6 +1492,8 @@ static void settle(simp *S) {
 
 /* After a collapse into slot k, every edge at k or at a vertex of its ring
  * (method-notes: their collapses would create triangles containing k). */
+static void ring_eval(simp *S, size_t n);
+
 static int reevaluate_ring(simp *S, uint32_t k) {
     uint32_t vm = next_stamp(S);
     size_t ne = 0;
@@ -1531,24 +1545,60 @@ static int reevaluate_ring(simp *S, uint32_t k) {
             }
         }
     }
+    /* what each listed edge needs; the evaluations (independent of one
+     * another: each writes only its own edge's cache) may run on two
+     * threads (ring_eval), the queue is then updated in list order as one
+     * thread would */
+    enum { RK_SKIP, RK_BOUND, RK_REMOVE, RK_EVAL };
+    if (!buf_reserve((void **)&S->rkind, &S->rkind_cap, ne + 1, 1) ||
+        !buf_reserve((void **)&S->rlist, &S->rlist_cap, ne + 1, sizeof *S->rlist) ||
+        !buf_reserve((void **)&S->rrho, &S->rrho_cap, ne + 1, sizeof *S->rrho) ||
+        !buf_reserve((void **)&S->rtol, &S->rtol_cap, ne + 1, 1))
+        return 0;
+    size_t nev = 0;
     for (size_t x = 0; x < ne; x++) {
         uint32_t ed = S->ebuf[2 * x];
+        uint8_t kind = S->phase == 1 || S->ebuf[2 * x + 1] ? RK_EVAL : RK_REMOVE;
         if (S->ev[2 * (size_t)ed] == k || S->ev[2 * (size_t)ed + 1] == k) S->estate[ed] &= (uint8_t)~E_OPT;
         else if (S->phase == 1) {
             /* An edge away from k keeps its endpoints, hence its candidates
              * and their quadric errors: one that failed C1 alone still does. */
             if (S->estate[ed] & E_TOLFAIL) {
                 STAT(skipped);
-                continue;
-            }
-            /* Exact lazy: an upper bound now, the priority when the bound
-             * reaches the top of the queue (settle). */
-            if (FEMLOD_SIMPLIFY_BOUND) {
-                bound_update(S, ed, k);
-                continue;
+                kind = RK_SKIP;
+            } else if (FEMLOD_SIMPLIFY_BOUND) {
+                /* Exact lazy: an upper bound now, the priority when the
+                 * bound reaches the top of the queue (settle). */
+                kind = RK_BOUND;
             }
         }
-        update_edge(S, ed, S->phase == 1 || S->ebuf[2 * x + 1]);
+        if (kind == RK_EVAL && (S->eflag[ed] & E_DEAD)) kind = RK_SKIP; /* as update_edge */
+        S->rkind[x] = kind;
+        if (kind == RK_EVAL) S->rlist[nev++] = ed;
+    }
+    ring_eval(S, nev);
+    if (S->oom) return 0;
+    nev = 0;
+    for (size_t x = 0; x < ne; x++) {
+        uint32_t ed = S->ebuf[2 * x];
+        switch (S->rkind[x]) {
+        case RK_BOUND:
+            bound_update(S, ed, k);
+            break;
+        case RK_REMOVE:
+            update_edge(S, ed, 0);
+            break;
+        case RK_EVAL: {
+            double rho = S->rrho[nev];
+            S->estate[ed] = (uint8_t)((S->estate[ed] & ~(E_TOLFAIL | E_STALE)) | (S->rtol[nev] ? E_TOLFAIL : 0));
+            if (rho >= 0.0) fl_heap_set(&S->heap, ed, rho);
+            else fl_heap_remove(&S->heap, ed);
+            nev++;
+            break;
+        }
+        default:
+            break;
+        }
     }
     return 1;
 }
@@ -1559,30 +1609,52 @@ static int reevaluate_ring(simp *S, uint32_t k) {
 /* Also polls the progress callback (with the fraction done so far) every
  * 65,536 edges: on a big mesh this pass takes seconds, and a time cap or a
  * user's cancel must reach it (the result does not depend on the polls). */
+static int eval_range(simp *S, size_t e0, size_t e1);
+
 static size_t evaluate_all(simp *S, const femlod_simplify_options *o, double done) {
     size_t n = 0;
-    for (size_t ed = 0; ed < S->ne; ed++) {
-        if (o->progress && (ed & 0xFFFFu) == 0xFFFFu && o->progress(o->progress_payload, done)) {
+    /* in chunks of 65,536 edges: evaluated on the run's threads into
+     * S->rrho / S->rtol (rkind: 1 when the edge is to be evaluated), then
+     * queued in edge order, as one thread would */
+    for (size_t e0 = 0; e0 < S->ne; e0 += 0x10000u) {
+        size_t e1 = e0 + 0x10000u < S->ne ? e0 + 0x10000u : S->ne;
+        if (e0 && o->progress && o->progress(o->progress_payload, done)) {
             S->cancelled = 1;
             return n;
         }
-        if (S->eflag[ed] & E_DEAD) continue;
-        if (fl_heap_contains(&S->heap, (uint32_t)ed)) continue;
-        int eligible = 1;
-        if (S->phase == 0) {
-            eligible = 0;
-            uint32_t v = S->ev[2 * ed];
-            const uint32_t *fl = S->refs + S->fstart[v];
-            for (uint32_t a = 0; a < S->fcount[v] && !eligible; a++) {
-                const uint32_t *te = S->tedge + 3 * (size_t)fl[a];
-                if ((te[0] == ed || te[1] == ed || te[2] == ed) && face_is_bad(S, fl[a])) eligible = 1;
+        if (!eval_range(S, e0, e1)) {
+            S->oom = 1;
+            return n;
+        }
+        for (size_t ed = e0; ed < e1; ed++) {
+            size_t x = ed - e0;
+            if (!S->rkind[x]) continue;
+            double rho = S->rrho[x];
+            S->estate[ed] = (uint8_t)((S->estate[ed] & ~(E_TOLFAIL | E_STALE)) | (S->rtol[x] ? E_TOLFAIL : 0));
+            if (rho >= 0.0) {
+                fl_heap_set(&S->heap, (uint32_t)ed, rho);
+                n++;
+            } else {
+                fl_heap_remove(&S->heap, (uint32_t)ed);
             }
         }
-        if (!eligible) continue;
-        update_edge(S, (uint32_t)ed, 1);
-        n += fl_heap_contains(&S->heap, (uint32_t)ed);
     }
     return n;
+}
+
+/* Whether evaluate_all evaluates edge ed: live, not queued, and in the
+ * pre-phase on a triangle below min_stretch. */
+static int eval_wanted(const simp *S, size_t ed) {
+    if (S->eflag[ed] & E_DEAD) return 0;
+    if (fl_heap_contains(&S->heap, (uint32_t)ed)) return 0;
+    if (S->phase != 0) return 1;
+    uint32_t v = S->ev[2 * ed];
+    const uint32_t *fl = S->refs + S->fstart[v];
+    for (uint32_t a = 0; a < S->fcount[v]; a++) {
+        const uint32_t *te = S->tedge + 3 * (size_t)fl[a];
+        if ((te[0] == ed || te[1] == ed || te[2] == ed) && face_is_bad(S, fl[a])) return 1;
+    }
+    return 0;
 }
 
 /* }====== */
@@ -1647,8 +1719,7 @@ static void simp_view(simp *w, const simp *S) {
     w->collapses = S->collapses;
     w->prephase = S->prephase;
     w->swept = 0;
-    memset(w->rejected, 0, sizeof w->rejected);
-    w->oom = 0;
+    w->oom = 0; /* rejected: w's own count goes on */
     w->cancelled = 0;
     w->R = R;
     w->ebuf = ebuf;
@@ -1667,7 +1738,14 @@ static void simp_view(simp *w, const simp *S) {
     w->newcone_cap = newcone_cap;
 }
 
+static void par_ctx_free(struct par_ctx *X);
+
 static void simp_free(simp *S) {
+    par_ctx_free(S->ectx);
+    free(S->rlist);
+    free(S->rkind);
+    free(S->rtol);
+    free(S->rrho);
     free(S->slot_of);
     free(S->pos);
     free(S->q);
@@ -1826,8 +1904,17 @@ static uint32_t *morton_slots(const double *pos, size_t nv, uint32_t *perm) {
     return inv;
 }
 
+#if FEMLOD_SIMPLIFY_STATS
+static double setup_t0;
+#define SETUP_T(k) (fprintf(stderr, "setup %d %.3f\n", (k), now_seconds() - setup_t0), (void)0)
+#else
+#define SETUP_T(k) ((void)0)
+#endif
 static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simplify_options *o,
                            size_t *dropped, femlod_error *err) {
+#if FEMLOD_SIMPLIFY_STATS
+    setup_t0 = now_seconds();
+#endif
     size_t nv = mesh->nv, nt_in = mesh->nt;
     const uint32_t *tin = mesh->tri;
     S->nv = nv;
@@ -1851,6 +1938,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     /* Vertex slots in Morton order of position: the neighbours of a vertex
      * then sit near it in memory, which halves the time on large meshes
      * (docs/simplify.md). Node ids stay the input indices. */
+    SETUP_T(0);
     uint32_t *slot_of = morton_slots(mesh->pos, nv, S->node);
     S->slot_of = slot_of;
     if (!slot_of) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
@@ -1865,6 +1953,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
         }
         nt++;
     }
+    SETUP_T(1);
     /* Faces in the order of their first vertex slot (a stable counting
      * sort): the faces around a vertex then share cache lines too. fin
      * remembers each face's input index for the output order. */
@@ -1915,8 +2004,10 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
             uint32_t v = S->tri[3 * f + c];
             S->refs[S->fstart[v] + S->fcount[v]++] = (uint32_t)f;
         }
+    SETUP_T(2);
     for (size_t f = 0; f < nt; f++) face_update_cache(S, (uint32_t)f);
 
+    SETUP_T(3);
     /* edges, numbered in increasing (a, b) order: each vertex a lists its
      * sides towards larger neighbours b */
     size_t cap_e = 3 * nt + 16; /* E <= 3F; trimmed below */
@@ -1989,6 +2080,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     if (FEMLOD_SIMPLIFY_BOUND) memset(S->ehint, 0xff, (2 * ne + 2) * sizeof *S->ehint);
 
+    SETUP_T(4);
     double lo[3], hi[3];
     femlod_mesh_bbox(mesh, lo, hi);
     double diag = sqrt(dist2(lo, hi));
@@ -1999,6 +2091,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     if (st != FEMLOD_OK) return st;
     S->eps = 1e-10 * (diag > 0 ? diag : 1.0);
 
+    SETUP_T(5);
     /* boundary and non-manifold edges */
     for (size_t e = 0; e < ne; e++) {
         uint32_t a = S->ev[2 * e], b = S->ev[2 * e + 1];
@@ -2046,6 +2139,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     S->stamp = 0;
     memset(S->vmark, 0, nv * sizeof *S->vmark);
 
+    SETUP_T(6);
     /* quadrics (4.1 (2)-(4)): face planes, optionally area-weighted and
      * renormalised per vertex (method-notes) so that tolerance keeps units */
     double *area = NULL;
@@ -2072,6 +2166,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
             if (area[v] > 0.0) fl_quadric_scale(S->q + v, (double)S->fcount[v] / area[v]);
         free(area);
     }
+    SETUP_T(7);
     /* features and line quadrics, weighted by sharpness */
     double cos_feat = S->feat_angle > 0.0 ? cos(S->feat_angle * PI / 180.0) : -2.0;
     for (size_t e = 0; e < ne; e++) {
@@ -2110,6 +2205,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
             }
         }
     }
+    SETUP_T(8);
     /* vertices that never move */
     for (size_t v = 0; v < nv; v++) {
         if (S->fdeg[v] == 1 || S->fdeg[v] >= 3) S->vflag[v] |= V_FIXED;
@@ -2145,9 +2241,11 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
         memset(S->fpt, 0xff, nt * sizeof *S->fpt);
         memset(S->pnext, 0xff, nv * sizeof *S->pnext);
     }
+    SETUP_T(9);
     if (!fl_heap_init(&S->heap, ne + 1)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     if (!build_grid(S, mean_edge > 0.0 ? FEMLOD_SIMPLIFY_GRID_CELL * mean_edge : 1.0))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    SETUP_T(10);
 #undef ALLOC
 #undef CALLOC
     return FEMLOD_OK;
@@ -2169,7 +2267,136 @@ static int progress(simp *S, const femlod_simplify_options *o, size_t live0, siz
 
 /* Pops edges until the target or an empty queue. Returns 0 on ENOMEM, 2
  * when cancelled, 1 otherwise. */
+/* {====== the exact queue's second thread (ring_eval)
+ *
+ * After each collapse the queue re-evaluates the ~33 edges at and around k
+ * (reevaluate_ring), three quarters of its time. The evaluations are
+ * independent, so a helper thread takes every other one: the main thread
+ * publishes the list (a generation count, release), both evaluate, the
+ * main thread waits for the helper's generation (acquire) and applies the
+ * results in list order, as with one thread. The helper spins between
+ * lists, yielding the processor now and then: it lives only while the
+ * queue runs. */
+
+typedef struct eval_helper {
+    simp W; /* its view of the run, refreshed before each list */
+    simp *S;
+    pthread_t th;
+    size_t n;
+    atomic_uint go, done;
+    atomic_int quit;
+} eval_helper;
+
+static inline void cpu_relax(void) {
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#endif
+}
+
+/* The helper's share of the list: the last 60% (the main thread also
+ * applies the results; a contiguous part, not every
+ * other entry: the results of the two threads then share no cache line). */
+static void helper_share(eval_helper *h) {
+    simp *S = h->S, *W = &h->W;
+    for (size_t x = h->n * 2 / 5; x < h->n; x++) {
+        S->rrho[x] = evaluate(W, &W->R, S->rlist[x]);
+        S->rtol[x] = (uint8_t)W->R.tolfail;
+    }
+}
+
+static void *helper_main(void *arg) {
+    eval_helper *h = arg;
+    unsigned seen = 0;
+    for (;;) {
+        unsigned g;
+        int spins = 0;
+        while ((g = atomic_load_explicit(&h->go, memory_order_acquire)) == seen) {
+            if (atomic_load_explicit(&h->quit, memory_order_acquire)) return NULL;
+            if (++spins < 2000) {
+                cpu_relax();
+            } else {
+                sched_yield();
+                spins = 0;
+            }
+        }
+        seen = g;
+        helper_share(h);
+        atomic_store_explicit(&h->done, g, memory_order_release);
+    }
+}
+
+/* Evaluates S->rlist[0, n) into S->rrho and S->rtol. */
+static void ring_eval(simp *S, size_t n) {
+    eval_helper *h = S->helper;
+    size_t mine = n;
+    unsigned g = 0;
+    if (h && n >= 4) {
+        simp_view(&h->W, S);
+        h->n = n;
+        g = atomic_load_explicit(&h->go, memory_order_relaxed) + 1;
+        atomic_store_explicit(&h->go, g, memory_order_release);
+        mine = n * 2 / 5;
+    }
+    for (size_t x = 0; x < mine; x++) {
+        S->rrho[x] = evaluate(S, &S->R, S->rlist[x]);
+        S->rtol[x] = (uint8_t)S->R.tolfail;
+    }
+    if (mine < n) {
+        int spins = 0;
+        while (atomic_load_explicit(&h->done, memory_order_acquire) != g) {
+            if (++spins < 2000) {
+                cpu_relax();
+            } else {
+                sched_yield();
+                spins = 0;
+            }
+        }
+        if (h->W.oom) S->oom = 1;
+    }
+}
+
+/* Starts the helper when the run has a second thread (none: ring_eval
+ * evaluates alone; the results are the same). */
+static void helper_start(simp *S) {
+    S->helper = NULL;
+    if (S->nthreads < 2) return;
+    eval_helper *h = calloc(1, sizeof *h);
+    if (!h) return;
+    h->S = S;
+    atomic_init(&h->go, 0);
+    atomic_init(&h->done, 0);
+    atomic_init(&h->quit, 0);
+    if (pthread_create(&h->th, NULL, helper_main, h) != 0) {
+        free(h);
+        return;
+    }
+    S->helper = h;
+}
+
+/* Stops the helper and adds its rejection counts to the run's. */
+static void helper_stop(simp *S) {
+    eval_helper *h = S->helper;
+    if (!h) return;
+    atomic_store_explicit(&h->quit, 1, memory_order_release);
+    pthread_join(h->th, NULL);
+    for (int r = 0; r < FEMLOD_REJECT_COUNT; r++) S->rejected[r] += h->W.rejected[r];
+    simp_free_scratch(&h->W);
+    free(h);
+    S->helper = NULL;
+}
+
+/* }====== */
+
+static int run_queue_1(simp *S, const femlod_simplify_options *o, size_t live0, size_t *next);
+
 static int run_queue(simp *S, const femlod_simplify_options *o, size_t live0, size_t *next) {
+    helper_start(S);
+    int r = run_queue_1(S, o, live0, next);
+    helper_stop(S);
+    return r;
+}
+
+static int run_queue_1(simp *S, const femlod_simplify_options *o, size_t live0, size_t *next) {
     ring *R = &S->R;
     while (S->live > S->target) {
         double key;
@@ -2400,8 +2627,9 @@ typedef struct par_task {
     uint32_t slab;
     size_t lo, hi;           /* its vertices: the stage list [lo, hi) */
     size_t refs_lo, refs_hi; /* its slice of the face-list arena */
-    uint32_t blocks;         /* its pool of grid blocks */
+    uint32_t blocks;         /* its pool of grid blocks (kept from sub-pass to sub-pass) */
     size_t nblocks;
+    uint32_t gen;            /* the grid the pool's blocks belong to */
     size_t budget;           /* triangles it may remove */
     femlod_collapse_log *log;
     u32vec klist, deferred;
@@ -2431,7 +2659,7 @@ typedef struct par_ctx {
     double tau;
     /* the running sub-pass */
     void (*fn)(struct par_ctx *, par_worker *, size_t);
-    size_t nrun;
+    size_t nrun, nrun_end;
     atomic_size_t next;
 } par_ctx;
 
@@ -2476,6 +2704,56 @@ static void par_free(par_ctx *X) {
     free(X->count);
 }
 
+static void par_ctx_free(par_ctx *X) {
+    if (!X) return;
+    par_free(X);
+    free(X);
+}
+
+/* evaluate_all's sub-chunk k of 4,096 edges. */
+static void par_eval_sub(par_ctx *X, par_worker *w, size_t k) {
+    simp *S = X->S, *W = &w->W;
+    size_t e0 = S->er0 + k * 4096, e1 = e0 + 4096 < X->nrun_end ? e0 + 4096 : X->nrun_end;
+    for (size_t ed = e0; ed < e1; ed++) {
+        size_t x = ed - S->er0;
+        S->rkind[x] = (uint8_t)eval_wanted(S, ed);
+        if (!S->rkind[x]) continue;
+        S->rrho[x] = evaluate(W, &W->R, (uint32_t)ed);
+        S->rtol[x] = (uint8_t)W->R.tolfail;
+    }
+}
+
+/* Evaluates the edges [e0, e1) that evaluate_all wants into S->rkind,
+ * S->rrho, S->rtol (index ed - e0) on the run's threads. 0 on ENOMEM. */
+static int eval_range(simp *S, size_t e0, size_t e1) {
+    size_t n = e1 - e0;
+    if (!buf_reserve((void **)&S->rkind, &S->rkind_cap, n + 1, 1) ||
+        !buf_reserve((void **)&S->rrho, &S->rrho_cap, n + 1, sizeof *S->rrho) ||
+        !buf_reserve((void **)&S->rtol, &S->rtol_cap, n + 1, 1))
+        return 0;
+    if (!S->ectx) {
+        par_ctx *X = calloc(1, sizeof *X);
+        if (!X) return 0;
+        X->S = S;
+        X->nw = S->nthreads < 1 ? 1 : (S->nthreads > 16 ? 16 : S->nthreads);
+        X->wk = fl_calloc((size_t)X->nw, sizeof *X->wk);
+        if (!X->wk) {
+            free(X);
+            return 0;
+        }
+        for (int t = 0; t < X->nw; t++) X->wk[t].X = X;
+        S->ectx = X;
+    }
+    par_ctx *X = S->ectx;
+    for (int t = 0; t < X->nw; t++) simp_view(&X->wk[t].W, S); /* rejected: summed into the run's at the end */
+    S->er0 = e0;
+    X->nrun_end = e1;
+    par_for(X, (n + 4095) / 4096, par_eval_sub);
+    for (int t = 0; t < X->nw; t++)
+        if (X->wk[t].W.oom) return 0;
+    return 1;
+}
+
 /* The first evaluation of the passes, chunk k of the edges: every edge is
  * evaluated on its own (evaluate writes only the edge's cached optimum). */
 static void par_eval_chunk(par_ctx *X, par_worker *w, size_t k) {
@@ -2497,6 +2775,7 @@ static void par_run_task(par_ctx *X, par_worker *w, size_t k) {
     par_task *t = X->task + k;
     const uint32_t *list = X->list[0].v;
     simp_view(W, S);
+    memset(W->rejected, 0, sizeof W->rejected); /* the task's own count */
     W->par = 1;
     W->slab = t->slab;
     W->nrefs = t->refs_lo;
@@ -2616,8 +2895,17 @@ static size_t par_tasks(par_ctx *X, size_t nslab, unsigned col, size_t floor_liv
         at += 8 * len + 256;
         t->refs_hi = at;
         t->budget = (size_t)((double)left * (double)len / (double)total);
-        t->nblocks = 256 + len / 2;
-        if (!fl_grid_take(&S->grid, t->nblocks, &t->blocks)) return (size_t)-1;
+        /* grid blocks: the pool the task slot kept, topped up */
+        if (t->gen != S->grid_gen) {
+            t->gen = S->grid_gen;
+            t->blocks = UINT32_MAX;
+            t->nblocks = 0;
+        }
+        size_t want = 128 + len / 8;
+        if (t->nblocks < want) {
+            if (!fl_grid_take(&S->grid, want - t->nblocks, &t->blocks)) return (size_t)-1;
+            t->nblocks = want;
+        }
         if (S->log && !t->log && !(t->log = fl_log_new(S->nv, 64))) return (size_t)-1;
     }
     return n;
@@ -2646,9 +2934,6 @@ static size_t par_merge(par_ctx *X, size_t n, u32vec *out) {
         done += t->done;
         if (t->stamp > S->stamp) S->stamp = t->stamp;
         if (t->fstamp > S->fstamp) S->fstamp = t->fstamp;
-        fl_grid_give(&S->grid, t->blocks, t->nblocks);
-        t->blocks = UINT32_MAX;
-        t->nblocks = 0;
         for (size_t m = 0; m < t->deferred.n && !oom; m++)
             if (!u32vec_push(out, t->deferred.v[m])) oom = 1;
     }
@@ -2704,7 +2989,14 @@ static size_t band_par_pass(simp *S, par_ctx *X, double tau, size_t floor_live, 
                 return (size_t)-1;
             }
             if (!n) continue;
+#if FEMLOD_SIMPLIFY_STATS
+            double tf = now_seconds();
+#endif
             par_for(X, n, par_run_task);
+            STAT_TIME_ST(3, tf);
+#if FEMLOD_SIMPLIFY_STATS
+            S->stats.listed[3]++;
+#endif
             size_t c = par_merge(X, n, &deferred);
             if (c == (size_t)-1) {
                 free(deferred.v);
@@ -3038,6 +3330,9 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
     }
     femlod_stop_reason why = FEMLOD_STOP_NO_VALID_EDGE;
     int r = simplify_run(S, o, &why);
+    if (S->ectx) /* evaluate_all's threads' rejection counts */
+        for (int t = 0; t < S->ectx->nw; t++)
+            for (int k = 0; k < FEMLOD_REJECT_COUNT; k++) S->rejected[k] += S->ectx->wk[t].W.rejected[k];
     femlod_mesh *m = NULL;
     double t5 = now_seconds();
     (void)t5;
@@ -3052,8 +3347,8 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
     STAT_TIME(5, t5);
     fprintf(stderr, "simplify seconds: setup %.3f pre-phase %.3f first evaluation %.3f passes %.3f queue %.3f output %.3f\n",
             S->stats.t[0], S->stats.t[1], S->stats.t[2], S->stats.t[3], S->stats.t[4], S->stats.t[5]);
-    fprintf(stderr, "parallel passes: listed %zu / %zu / %zu, seconds %.3f / %.3f / %.3f\n", S->stats.listed[0],
-            S->stats.listed[1], S->stats.listed[2], S->stats.tstage[0], S->stats.tstage[1], S->stats.tstage[2]);
+    fprintf(stderr, "parallel passes: listed %zu / %zu / %zu, seconds %.3f / %.3f / %.3f; %zu sub-passes, %.3f s in tasks\n", S->stats.listed[0],
+            S->stats.listed[1], S->stats.listed[2], S->stats.tstage[0], S->stats.tstage[1], S->stats.tstage[2], S->stats.listed[3], S->stats.tstage[3]);
     {
         const simp_stats *c = &S->stats;
         double n = S->collapses ? (double)S->collapses : 1.0;
@@ -3094,7 +3389,7 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
         result->max_normal_change = S->cone_on ? S->max_nc : FEMLOD_SIMPLIFY_OFF;
         result->max_valence = S->val_on ? S->maxval : -1;
         result->fast_above = S->fast > 0.0 ? S->fast : FEMLOD_SIMPLIFY_OFF;
-        result->threads = S->fast > 0.0 ? S->nthreads : 1;
+        result->threads = S->nthreads;
         result->seconds = now_seconds() - t0;
     }
     *out = m;

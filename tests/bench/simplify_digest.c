@@ -3,7 +3,8 @@
  * speed change leaves every result byte-identical: run it before and after
  * and compare the lines (docs/simplify.md "Benchmark").
  *
- * Usage: simplify_digest [data-folder [case-substring]]
+ * Usage: simplify_digest [data-folder [case-substring [threads]]]  ("" for
+ * every case; threads: options.threads, which must not change a digest)
  * Each line: case name, output triangles, collapses, a 64-bit FNV-1a hash of
  * the output positions and triangles, one of the collapse log, and the
  * seconds (the only field that may differ between two runs). */
@@ -40,6 +41,7 @@ typedef struct scase {
     double tol, st, sz, dev, nc;
     int val, keep_boundary, area, lock;
     double fangle, fweight;
+    double fast; /* fast_above */
 } scase;
 
 static int lock_half(void *payload, double x, double y, double z) {
@@ -51,25 +53,31 @@ static int lock_half(void *payload, double x, double y, double z) {
 
 int main(int argc, char **argv) {
     const char *dir = argc > 1 ? argv[1] : FEMLOD_SHARED_DATA;
-    const char *only = argc > 2 ? argv[2] : NULL;
+    const char *only = argc > 2 && argv[2][0] ? argv[2] : NULL;
+    int threads = argc > 3 ? atoi(argv[3]) : 0; /* options.threads: the digests must not change with it */
     static const scase cases[] = {
-        {"cover-paper-12k", "cover.obj", 0, 12000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0},
-        {"cover-paper-6k", "cover.obj", 0, 6000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0},
-        {"cover-default-all", "cover.obj", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
-        {"cover-dev-lock", "cover.obj", 0, 3000, 0, 0.3, 0, 0.05, 0, 10, 0, 0, 1, 0, 0},
-        {"cover-nocone-area", "cover.obj", 0, 5000, 0, 0, 0, 0, -1, -1, 0, 1, 0, 0, 0},
-        {"cover-notol", "cover.obj", 0, 2000, -1, -1, -1, 0, 30, 0, 0, 0, 0, 0, 0},
-        {"fandisk-2k", "fandisk.obj", 0, 2000, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
-        {"fandisk-strict", "fandisk.obj", 0, 1000, 0, 0.4, 0, 0.01, 20, 8, 0, 0, 0, 0, 0},
-        {"fandisk-paper", "fandisk.obj", 0, 3000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0},
-        {"bunny-3k", "bunny.obj", 0, 3000, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
-        {"sphere-hole", "sphereWithHole.stl", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
-        {"sphere-hole-keep", "sphereWithHole.stl", 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0},
-        {"spider", "spider_binary.stl", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
-        {"cover-nofeat", "cover.obj", 0, 4000, 0, 0, 0, 0, 0, 0, 0, 0, 0, -1, -1},
-        {"fandisk-dev-nocone", "fandisk.obj", 0, 1500, 0, 0, 0, 0.02, -1, 0, 0, 0, 0, 60, 5},
-        {"engine", "2CylinderEngine.glb", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
-        {"cover1-paper-12k", "cover.obj", 1, 12000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0},
+        {"cover-paper-12k", "cover.obj", 0, 12000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0, 0},
+        {"cover-paper-6k", "cover.obj", 0, 6000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0, 0},
+        {"cover-default-all", "cover.obj", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
+        {"cover-dev-lock", "cover.obj", 0, 3000, 0, 0.3, 0, 0.05, 0, 10, 0, 0, 1, 0, 0, 0},
+        {"cover-nocone-area", "cover.obj", 0, 5000, 0, 0, 0, 0, -1, -1, 0, 1, 0, 0, 0, 0},
+        {"cover-notol", "cover.obj", 0, 2000, -1, -1, -1, 0, 30, 0, 0, 0, 0, 0, 0, 0},
+        {"fandisk-2k", "fandisk.obj", 0, 2000, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
+        {"fandisk-strict", "fandisk.obj", 0, 1000, 0, 0.4, 0, 0.01, 20, 8, 0, 0, 0, 0, 0, 0},
+        {"fandisk-paper", "fandisk.obj", 0, 3000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0, 0},
+        {"bunny-3k", "bunny.obj", 0, 3000, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
+        {"sphere-hole", "sphereWithHole.stl", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
+        {"sphere-hole-keep", "sphereWithHole.stl", 0, 0, 0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 0},
+        {"spider", "spider_binary.stl", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
+        {"cover-nofeat", "cover.obj", 0, 4000, 0, 0, 0, 0, 0, 0, 0, 0, 0, -1, -1, 0},
+        {"fandisk-dev-nocone", "fandisk.obj", 0, 1500, 0, 0, 0, 0.02, -1, 0, 0, 0, 0, 60, 5, 0},
+        {"engine", "2CylinderEngine.glb", 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0},
+        {"cover1-paper-12k", "cover.obj", 1, 12000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0, 0},
+        /* fast passes */
+        {"cover-fast-12k", "cover.obj", 0, 12000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0, 2},
+        {"cover-fast-dev-lock", "cover.obj", 0, 3000, 0, 0.3, 0, 0.05, 0, 10, 0, 0, 1, 0, 0, 1.5},
+        {"bunny-fast-3k", "bunny.obj", 0, 3000, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 2},
+        {"cover1-fast-12k", "cover.obj", 1, 12000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0, 2},
     };
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
         const scase *k = cases + c;
@@ -101,6 +109,8 @@ int main(int argc, char **argv) {
         if (k->lock) o.lock_fn = lock_half;
         o.feature_angle = k->fangle;
         o.feature_weight = k->fweight;
+        o.fast_above = k->fast;
+        o.threads = threads;
         femlod_mesh *out = NULL;
         femlod_collapse_log *log = NULL;
         femlod_simplify_result res;

@@ -935,10 +935,12 @@ static void test_fast_passes(void) {
     femlod_mesh_free(m);
 }
 
-/* The fast passes' threads (docs/design.md "Parallel fast passes"): the
- * output and the log are byte-identical for 1, 2, 3 and 8 threads, and each
- * run keeps every promise (simplify_checked). With max_deviation and locks,
- * whose state (point lists, fixed vertices) the workers also share. */
+/* Threads (docs/design.md "Parallel fast passes", "The exact queue's second
+ * thread"): the output, the log and the rejection counts are byte-identical
+ * for 1, 2, 3 and 8 threads, and each run keeps every promise
+ * (simplify_checked). With max_deviation and locks, whose state (point
+ * lists, fixed vertices) the workers also share; and in the exact order,
+ * whose ring re-evaluations and full evaluations are shared out. */
 static void threads_case(const femlod_mesh *m, femlod_simplify_options o, const char *name) {
     static const int counts[4] = {1, 2, 3, 8};
     run first;
@@ -950,7 +952,7 @@ static void threads_case(const femlod_mesh *m, femlod_simplify_options o, const 
         run r;
         if (!simplify_checked(&r, m, &o, label)) continue;
         CHECK(r.res.threads == counts[k]);
-        CHECK(r.res.fast_collapses > 0);
+        CHECK((r.res.fast_collapses > 0) == (o.fast_above > 0));
         if (!have) {
             first = r;
             have = 1;
@@ -983,6 +985,8 @@ static void test_threads(void) {
     o.max_deviation = 0.003;
     o.lock_fn = lock_left;
     threads_case(m, o, "fandisk fast 1000, max_deviation and locks");
+    o.fast_above = 0.0;
+    threads_case(m, o, "fandisk exact 1000, max_deviation and locks");
     femlod_mesh_free(m);
     femlod_error err;
     o = (femlod_simplify_options)FEMLOD_SIMPLIFY_OPTIONS_INIT;
