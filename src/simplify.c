@@ -2690,6 +2690,13 @@ static void par_for(par_ctx *X, size_t n, void (*fn)(par_ctx *, par_worker *, si
 }
 
 static void par_free(par_ctx *X) {
+#if FEMLOD_SIMPLIFY_STATS
+    /* the workers' counts (the first 14 fields, all size_t) */
+    for (int t = 0; t < X->nw; t++) {
+        size_t *a = (size_t *)&X->S->stats, *w = (size_t *)&X->wk[t].W.stats;
+        for (int k = 0; k < 14; k++) a[k] += w[k];
+    }
+#endif
     for (int t = 0; t < X->nw; t++) simp_free_scratch(&X->wk[t].W);
     free(X->wk);
     for (size_t k = 0; k < X->captask; k++) {

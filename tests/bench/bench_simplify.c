@@ -88,12 +88,11 @@ int main(int argc, char **argv) {
     for (size_t i = 0; i < 3 * nt; i++) idx[i] = tri[i];
 
     const size_t targets[2] = {50000, 12000};
-    /* femlod in its default exact order and with fast passes above twice
-     * the target (options.fast_above, docs/simplify.md "Fast passes") */
-    /* femlod in its default exact order, with fast passes above twice the
-     * target on one thread and on all (options.threads = 0) */
+    /* femlod in its default exact order (its default threads: the queue
+     * uses two), with fast passes above twice the target on one thread and
+     * on all (options.threads = 0) */
     const double modes[3] = {0.0, 2.0, 2.0};
-    const int threads[3] = {1, 1, 0};
+    const int threads[3] = {0, 1, 0};
     const char *const names[3] = {"femlod exact   ", "femlod fast 2/1", "femlod fast 2  "};
     for (int k = 0; k < 2; k++) {
         double tm[MAXRUNS], cm[MAXRUNS];
