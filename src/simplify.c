@@ -171,6 +171,7 @@ typedef struct ring {
 
 typedef struct simp_stats {
     size_t evals, settles, bounds, rings, cands, cand_ok, solves, pops, links, expensive, cells, items, tritri, skipped;
+    size_t attempts, attempt_low, attempt_fresh;
     double t[6]; /* seconds: setup, pre-phase, first evaluation of the passes, passes, queue, output */
     size_t listed[4]; /* parallel passes: vertices listed in stage 0, 1, the remainder; sub-passes */
     double tstage[4]; /* and their seconds; [3]: in par_for */
@@ -231,6 +232,7 @@ typedef struct simp {
     uint32_t stamp, fstamp;
 
     ring R;
+    ring R2; /* band_vertex: the best edge's evaluation while others are evaluated */
     /* scratch */
     uint32_t *ebuf;
     size_t ebuf_cap;
@@ -1672,13 +1674,18 @@ static int erec_less(const erec *x, const erec *y) {
 }
 
 /* The per-thread part: the ring and the check buffers. */
+static void ring_free(ring *R) {
+    free(R->face);
+    free(R->a);
+    free(R->b);
+    free(R->from_j);
+    free(R->lab);
+    free(R->lab2);
+}
+
 static void simp_free_scratch(simp *S) {
-    free(S->R.face);
-    free(S->R.a);
-    free(S->R.b);
-    free(S->R.from_j);
-    free(S->R.lab);
-    free(S->R.lab2);
+    ring_free(&S->R);
+    ring_free(&S->R2);
     free(S->ebuf);
     free(S->pbuf);
     free(S->pdst);
@@ -1691,7 +1698,7 @@ static void simp_free_scratch(simp *S) {
 /* A worker's view of the run (band_par): the run's state with w's own
  * scratch kept. */
 static void simp_view(simp *w, const simp *S) {
-    ring R = w->R;
+    ring R = w->R, R2 = w->R2;
     uint32_t *ebuf = w->ebuf, *pbuf = w->pbuf, *pdst = w->pdst;
     size_t ebuf_cap = w->ebuf_cap, pbuf_cap = w->pbuf_cap, pdst_cap = w->pdst_cap;
     double *tbox = w->tbox;
@@ -1722,6 +1729,7 @@ static void simp_view(simp *w, const simp *S) {
     w->oom = 0; /* rejected: w's own count goes on */
     w->cancelled = 0;
     w->R = R;
+    w->R2 = R2;
     w->ebuf = ebuf;
     w->ebuf_cap = ebuf_cap;
     w->pbuf = pbuf;
@@ -2285,6 +2293,13 @@ typedef struct eval_helper {
     size_t n;
     atomic_uint go, done;
     atomic_int quit;
+    /* after a short spin the helper sleeps (so that it never holds a core
+     * another process could use): sleeping is set under mu before the
+     * last look at go, and the main thread signals under mu when it sees
+     * it set (both sides sequentially consistent: one sees the other) */
+    atomic_int sleeping;
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
 } eval_helper;
 
 static inline void cpu_relax(void) {
@@ -2294,8 +2309,8 @@ static inline void cpu_relax(void) {
 }
 
 /* The helper's share of the list: the last 60% (the main thread also
- * applies the results; a contiguous part, not every
- * other entry: the results of the two threads then share no cache line). */
+ * applies the results), a contiguous part rather than every other entry,
+ * so that the two threads' results share no cache line. */
 static void helper_share(eval_helper *h) {
     simp *S = h->S, *W = &h->W;
     for (size_t x = h->n * 2 / 5; x < h->n; x++) {
@@ -2310,19 +2325,30 @@ static void *helper_main(void *arg) {
     for (;;) {
         unsigned g;
         int spins = 0;
-        while ((g = atomic_load_explicit(&h->go, memory_order_acquire)) == seen) {
-            if (atomic_load_explicit(&h->quit, memory_order_acquire)) return NULL;
-            if (++spins < 2000) {
+        while ((g = atomic_load(&h->go)) == seen) {
+            if (atomic_load(&h->quit)) return NULL;
+            if (++spins < 4000) {
                 cpu_relax();
-            } else {
-                sched_yield();
-                spins = 0;
+                continue;
             }
+            pthread_mutex_lock(&h->mu);
+            atomic_store(&h->sleeping, 1);
+            while (atomic_load(&h->go) == seen && !atomic_load(&h->quit)) pthread_cond_wait(&h->cv, &h->mu);
+            atomic_store(&h->sleeping, 0);
+            pthread_mutex_unlock(&h->mu);
+            spins = 0;
         }
         seen = g;
         helper_share(h);
         atomic_store_explicit(&h->done, g, memory_order_release);
     }
+}
+
+static void helper_wake(eval_helper *h) {
+    if (!atomic_load(&h->sleeping)) return;
+    pthread_mutex_lock(&h->mu);
+    pthread_cond_signal(&h->cv);
+    pthread_mutex_unlock(&h->mu);
 }
 
 /* Evaluates S->rlist[0, n) into S->rrho and S->rtol. */
@@ -2334,7 +2360,8 @@ static void ring_eval(simp *S, size_t n) {
         simp_view(&h->W, S);
         h->n = n;
         g = atomic_load_explicit(&h->go, memory_order_relaxed) + 1;
-        atomic_store_explicit(&h->go, g, memory_order_release);
+        atomic_store(&h->go, g);
+        helper_wake(h);
         mine = n * 2 / 5;
     }
     for (size_t x = 0; x < mine; x++) {
@@ -2366,7 +2393,19 @@ static void helper_start(simp *S) {
     atomic_init(&h->go, 0);
     atomic_init(&h->done, 0);
     atomic_init(&h->quit, 0);
+    atomic_init(&h->sleeping, 0);
+    if (pthread_mutex_init(&h->mu, NULL) != 0) {
+        free(h);
+        return;
+    }
+    if (pthread_cond_init(&h->cv, NULL) != 0) {
+        pthread_mutex_destroy(&h->mu);
+        free(h);
+        return;
+    }
     if (pthread_create(&h->th, NULL, helper_main, h) != 0) {
+        pthread_cond_destroy(&h->cv);
+        pthread_mutex_destroy(&h->mu);
         free(h);
         return;
     }
@@ -2377,8 +2416,13 @@ static void helper_start(simp *S) {
 static void helper_stop(simp *S) {
     eval_helper *h = S->helper;
     if (!h) return;
-    atomic_store_explicit(&h->quit, 1, memory_order_release);
+    atomic_store(&h->quit, 1);
+    pthread_mutex_lock(&h->mu);
+    pthread_cond_signal(&h->cv);
+    pthread_mutex_unlock(&h->mu);
     pthread_join(h->th, NULL);
+    pthread_cond_destroy(&h->cv);
+    pthread_mutex_destroy(&h->mu);
     for (int r = 0; r < FEMLOD_REJECT_COUNT; r++) S->rejected[r] += h->W.rejected[r];
     simp_free_scratch(&h->W);
     free(h);
@@ -2511,6 +2555,11 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
     uint32_t em = next_stamp(S);
     uint32_t best = UINT32_MAX;
     float bkey = -1.0f, vb = -1.0f;
+    /* fresh: best was evaluated in this visit, its evaluation kept in S->R2
+     * (nothing it reads changes during the visit: evaluating it again
+     * would give the same) */
+    int fresh = 0;
+    double frho = -1.0;
     const uint32_t *fl = S->refs + S->fstart[v];
     uint32_t cnt = S->fcount[v];
     for (uint32_t a = 0; a < cnt; a++) {
@@ -2522,11 +2571,14 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
             if (S->emark[ed] == em) continue;
             S->emark[ed] = em;
             if (S->eflag[ed] & E_DEAD) continue;
+            int now = 0;
+            double rnow = -1.0;
             if (S->estate[ed] & E_STALE) {
-                double rho = evaluate(S, R, ed);
+                rnow = evaluate(S, R, ed);
                 if (S->oom) return -1;
-                S->ekey[ed] = rho < 0.0 ? -1.0f : (float)rho;
+                S->ekey[ed] = rnow < 0.0 ? -1.0f : (float)rnow;
                 S->estate[ed] &= (uint8_t)~E_STALE;
+                now = 1;
             }
             float key = S->ekey[ed];
             if (key > vb) vb = key;
@@ -2535,13 +2587,33 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
             if (key > bkey || (key == bkey && ed < best)) {
                 bkey = key;
                 best = ed;
+                fresh = now;
+                if (now) {
+                    ring x = S->R;
+                    S->R = S->R2;
+                    S->R2 = x;
+                    frho = rnow;
+                }
             }
         }
     }
     S->vbest[v] = vb;
     if (best == UINT32_MAX) return 0;
-    /* its key may predate changes around its far end: evaluate again */
-    double rho = evaluate(S, R, best);
+    /* its key may predate changes around its far end: evaluate again
+     * (unless it was evaluated in this visit) */
+    STAT(attempts);
+    double rho;
+    if (fresh) {
+        ring x = S->R;
+        S->R = S->R2;
+        S->R2 = x;
+        rho = frho;
+    } else {
+        rho = evaluate(S, R, best);
+    }
+#if FEMLOD_SIMPLIFY_STATS
+    if (rho < tau) S->stats.attempt_low++;
+#endif
     if (S->oom) return -1;
     S->ekey[best] = rho < 0.0 ? -1.0f : (float)rho;
     if (S->par && rho >= tau && !par_ring_owned(S, R)) return 2;
@@ -2691,10 +2763,10 @@ static void par_for(par_ctx *X, size_t n, void (*fn)(par_ctx *, par_worker *, si
 
 static void par_free(par_ctx *X) {
 #if FEMLOD_SIMPLIFY_STATS
-    /* the workers' counts (the first 14 fields, all size_t) */
+    /* the workers' counts (the first 17 fields, all size_t) */
     for (int t = 0; t < X->nw; t++) {
         size_t *a = (size_t *)&X->S->stats, *w = (size_t *)&X->wk[t].W.stats;
-        for (int k = 0; k < 14; k++) a[k] += w[k];
+        for (int k = 0; k < 17; k++) a[k] += w[k];
     }
 #endif
     for (int t = 0; t < X->nw; t++) simp_free_scratch(&X->wk[t].W);
@@ -3354,6 +3426,7 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
     STAT_TIME(5, t5);
     fprintf(stderr, "simplify seconds: setup %.3f pre-phase %.3f first evaluation %.3f passes %.3f queue %.3f output %.3f\n",
             S->stats.t[0], S->stats.t[1], S->stats.t[2], S->stats.t[3], S->stats.t[4], S->stats.t[5]);
+    fprintf(stderr, "band attempts %zu, below tau on re-evaluation %zu\n", S->stats.attempts, S->stats.attempt_low);
     fprintf(stderr, "parallel passes: listed %zu / %zu / %zu, seconds %.3f / %.3f / %.3f; %zu sub-passes, %.3f s in tasks\n", S->stats.listed[0],
             S->stats.listed[1], S->stats.listed[2], S->stats.tstage[0], S->stats.tstage[1], S->stats.tstage[2], S->stats.listed[3], S->stats.tstage[3]);
     {
