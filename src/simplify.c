@@ -211,7 +211,7 @@ typedef struct simp {
     float *fsz;  /* longest edge */
     double *finv; /* 1 / fsz, for Sz_DIF */
     float *cone; /* axis xyz, half-angle (radians) */
-    uint32_t *fmark;
+    uint32_t *fmark; /* set-up only: the pinched-vertex flood (with vertex stamps) */
     uint32_t *fpt; /* deviation: first removed input vertex assigned to the face */
     uint32_t *pnext;
 
@@ -229,7 +229,7 @@ typedef struct simp {
     size_t grid_live; /* live faces when the grid was built */
     uint32_t grid_gen; /* grids built so far (band_par's block pools belong to one) */
     double grid_h;
-    uint32_t stamp, fstamp;
+    uint32_t stamp;
 
     ring R;
     ring R2; /* band_vertex: the best edge's evaluation while others are evaluated */
@@ -415,13 +415,6 @@ static uint32_t next_stamp(simp *S) {
     return S->stamp;
 }
 
-static uint32_t next_fstamp(simp *S) {
-    if (++S->fstamp == 0) {
-        memset(S->fmark, 0, S->nt * sizeof *S->fmark);
-        S->fstamp = 1;
-    }
-    return S->fstamp;
-}
 
 /* }====== */
 
@@ -1014,6 +1007,13 @@ static int star_embedded(const double c[3], const double *const *u, const double
     return wind == 1;
 }
 
+/* f is one of R's ring or shared faces. */
+static inline int ring_has_face(const ring *R, uint32_t f) {
+    for (size_t r = 0; r < R->n; r++)
+        if (R->face[r] == f) return 1;
+    return R->ns > 0 && (R->sface[0] == f || (R->ns > 1 && R->sface[1] == f));
+}
+
 #define K_ID (UINT32_MAX - 1) /* the id of the new vertex in intersection tests */
 
 /* The slab (band_par) of a grid cell coordinate and of a point. */
@@ -1048,11 +1048,17 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
             hi[k] = mx(hi[k], bx[3 + k]);
         }
     }
-    uint32_t ex = next_fstamp(S);
-    for (int side = 0; side < 2; side++) {
-        uint32_t v = side ? R->j : R->i;
-        const uint32_t *fl = S->refs + S->fstart[v];
-        for (uint32_t m = 0; m < S->fcount[v]; m++) S->fmark[fl[m]] = ex;
+    /* the faces being replaced (those at i or j: R's ring and shared
+     * faces), told by their id range, then by a scan of the ring (no
+     * per-face mark: its reads would miss the cache at every item) */
+    uint32_t fmin = UINT32_MAX, fmax = 0;
+    for (size_t r = 0; r < R->n; r++) {
+        fmin = R->face[r] < fmin ? R->face[r] : fmin;
+        fmax = R->face[r] > fmax ? R->face[r] : fmax;
+    }
+    for (size_t s = 0; s < R->ns; s++) {
+        fmin = R->sface[s] < fmin ? R->sface[s] : fmin;
+        fmax = R->sface[s] > fmax ? R->sface[s] : fmax;
     }
     /* star certificates of k and of the ring vertices (interior, manifold
      * ones), per new triangle: cert[2r] for a_r, cert[2r+1] for b_r */
@@ -1122,7 +1128,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                     for (uint32_t s = 0; s < lim; s++) {
                         uint32_t f = B->item[s];
                         STAT(items);
-                        if (S->fmark[f] == ex) continue; /* being replaced */
+                        if (f >= fmin && f <= fmax && ring_has_face(R, f)) continue; /* being replaced */
                         const uint32_t *t = S->tri + 3 * (size_t)f;
                         const double *Q[3] = {P(S, t[0]), P(S, t[1]), P(S, t[2])};
                         double qb[6];
@@ -2708,7 +2714,7 @@ typedef struct par_task {
     /* what it did */
     size_t collapses, removed, swept, done, refs_end;
     size_t rejected[FEMLOD_REJECT_COUNT];
-    uint32_t stamp, fstamp;
+    uint32_t stamp;
     int oom;
 } par_task;
 
@@ -2889,7 +2895,6 @@ static void par_run_task(par_ctx *X, par_worker *w, size_t k) {
     t->nblocks = W->grid.nfree;
     memcpy(t->rejected, W->rejected, sizeof t->rejected);
     t->stamp = W->stamp;
-    t->fstamp = W->fstamp;
     t->oom = W->oom;
 }
 
@@ -2948,10 +2953,6 @@ static size_t par_tasks(par_ctx *X, size_t nslab, unsigned col, size_t floor_liv
         memset(S->vmark, 0, S->nv * sizeof *S->vmark);
         memset(S->emark, 0, S->ne * sizeof *S->emark);
         S->stamp = 0;
-    }
-    if (S->fstamp > 0x7FFFFFFFu) {
-        memset(S->fmark, 0, S->nt * sizeof *S->fmark);
-        S->fstamp = 0;
     }
     /* face lists: a slice per task, enough for a collapse per two visits */
     size_t need = 0;
@@ -3012,7 +3013,6 @@ static size_t par_merge(par_ctx *X, size_t n, u32vec *out) {
         offset += t->collapses;
         done += t->done;
         if (t->stamp > S->stamp) S->stamp = t->stamp;
-        if (t->fstamp > S->fstamp) S->fstamp = t->fstamp;
         for (size_t m = 0; m < t->deferred.n && !oom; m++)
             if (!u32vec_push(out, t->deferred.v[m])) oom = 1;
     }

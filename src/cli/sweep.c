@@ -514,7 +514,7 @@ static int parse_sweep(sweep *s) {
         const char *a = c->argv[i];
         if (strncmp(a, "--", 2) == 0) {
             const char *v = NULL;
-            long n;
+            long n = 0;
             int st = -1;
             if (is_option(a, "--grid")) {
                 if (!(v = option_value(s, &i, "--grid"))) return fl_cli_usage_error("--grid needs a value");
