@@ -1203,10 +1203,6 @@ static int expensive_checks(simp *S, ring *R, int c) {
 
 /* {====== collapse (4.2 step 4) and the log (5.1) */
 
-static int cmp_u32(const void *a, const void *b) {
-    uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-    return (x > y) - (x < y);
-}
 
 static uint8_t local_ref(const simp *S, const ring *R, size_t nvs, uint32_t v) {
     if (v == R->i) return 0;
@@ -1863,6 +1859,60 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
     return FEMLOD_OK;
 }
 
+/* {====== set-up in parallel: maps over index ranges
+ *
+ * The set-up's per-face and per-vertex loops (face caches, quadrics,
+ * Morton keys) write only what their index owns, reading what no part
+ * writes; cut into contiguous ranges, one per thread, they give the same
+ * bytes for any thread count. */
+
+typedef void (*range_fn)(void *ctx, size_t lo, size_t hi, int part);
+
+typedef struct range_job {
+    void *ctx;
+    range_fn fn;
+    size_t lo, hi;
+    int part;
+    pthread_t th;
+} range_job;
+
+static void *range_main(void *arg) {
+    range_job *j = arg;
+    j->fn(j->ctx, j->lo, j->hi, j->part);
+    return NULL;
+}
+
+/* The parts par_ranges cuts [0, n) into: part t is [n t / parts, n (t + 1) / parts). */
+static int par_parts(int nth, size_t n) {
+    if (nth > 16) nth = 16;
+    return nth < 2 || n < 32768 ? 1 : nth;
+}
+
+static size_t par_part_lo(size_t n, int parts, int t) { return n * (size_t)t / (size_t)parts; }
+
+/* fn over [0, n) in par_parts(nth, n) parts, one per thread (this one
+ * included); a thread that cannot start has its part done here. */
+static void par_ranges(int nth, size_t n, range_fn fn, void *ctx) {
+    range_job job[16];
+    int started[16] = {0};
+    int parts = par_parts(nth, n);
+    for (int t = 0; t < parts; t++) {
+        job[t].ctx = ctx;
+        job[t].fn = fn;
+        job[t].lo = par_part_lo(n, parts, t);
+        job[t].hi = par_part_lo(n, parts, t + 1);
+        job[t].part = t;
+    }
+    for (int t = 1; t < parts; t++) started[t] = pthread_create(&job[t].th, NULL, range_main, &job[t]) == 0;
+    fn(ctx, job[0].lo, job[0].hi, 0);
+    for (int t = 1; t < parts; t++) {
+        if (started[t]) pthread_join(job[t].th, NULL);
+        else fn(ctx, job[t].lo, job[t].hi, t);
+    }
+}
+
+/* }====== */
+
 static uint64_t spread21(uint32_t x) {
     uint64_t v = x & 0x1fffff;
     v = (v | v << 32) & 0x1f00000000ffffull;
@@ -1884,38 +1934,209 @@ static int cmp_mkey(const void *a, const void *b) {
     return (x->id > y->id) - (x->id < y->id);
 }
 
-/* perm[s] = the input vertex of slot s, sorted by (Morton code, index);
- * returns the inverse (input -> slot), NULL on ENOMEM. */
-static uint32_t *morton_slots(const double *pos, size_t nv, uint32_t *perm) {
-    mkey *k = fl_alloc(nv, sizeof *k);
+typedef struct morton_ctx {
+    const double *pos;
+    mkey *k;
+    double lo[3], sc;
+} morton_ctx;
+
+static void morton_keys(void *arg, size_t v0, size_t v1, int part) {
+    (void)part;
+    const morton_ctx *m = arg;
+    for (size_t v = v0; v < v1; v++) {
+        uint64_t code = 0;
+        for (int c = 0; c < 3; c++) code |= spread21((uint32_t)((m->pos[3 * v + c] - m->lo[c]) * m->sc)) << c;
+        m->k[v].key = code;
+        m->k[v].id = (uint32_t)v;
+    }
+}
+
+/* perm[s] = the input vertex of slot s, sorted by (Morton code, index):
+ * a stable radix sort of the codes, 8 bits a pass (a pass whose digit is
+ * the same everywhere is skipped), from index order. Returns the inverse
+ * (input -> slot), NULL on ENOMEM. */
+static uint32_t *morton_slots(const double *pos, size_t nv, uint32_t *perm, int nth) {
+    mkey *k = fl_alloc(nv, sizeof *k), *k2 = fl_alloc(nv, sizeof *k2);
     uint32_t *inv = fl_alloc(nv, sizeof *inv);
-    if (!k || !inv) {
+    if (!k || !k2 || !inv) {
         free(k);
+        free(k2);
         free(inv);
         return NULL;
     }
-    double lo[3] = {__builtin_inf(), __builtin_inf(), __builtin_inf()}, hi[3];
-    for (int c = 0; c < 3; c++) hi[c] = -lo[c];
+    morton_ctx m = {pos, k, {__builtin_inf(), __builtin_inf(), __builtin_inf()}, 0.0};
+    double hi[3];
+    for (int c = 0; c < 3; c++) hi[c] = -m.lo[c];
     for (size_t v = 0; v < nv; v++)
         for (int c = 0; c < 3; c++) {
-            lo[c] = mn(lo[c], pos[3 * v + c]);
+            m.lo[c] = mn(m.lo[c], pos[3 * v + c]);
             hi[c] = mx(hi[c], pos[3 * v + c]);
         }
-    double ext = mx(hi[0] - lo[0], mx(hi[1] - lo[1], hi[2] - lo[2]));
-    double sc = ext > 0.0 ? 2097151.0 / ext : 0.0;
-    for (size_t v = 0; v < nv; v++) {
-        uint64_t code = 0;
-        for (int c = 0; c < 3; c++) code |= spread21((uint32_t)((pos[3 * v + c] - lo[c]) * sc)) << c;
-        k[v].key = code;
-        k[v].id = (uint32_t)v;
+    double ext = mx(hi[0] - m.lo[0], mx(hi[1] - m.lo[1], hi[2] - m.lo[2]));
+    m.sc = ext > 0.0 ? 2097151.0 / ext : 0.0;
+    par_ranges(nth, nv, morton_keys, &m);
+    for (int shift = 0; shift < 64; shift += 8) {
+        size_t cnt[257] = {0};
+        for (size_t v = 0; v < nv; v++) cnt[((k[v].key >> shift) & 255) + 1]++;
+        int one = 0;
+        for (int d = 1; d <= 256; d++) one |= cnt[d] == nv;
+        if (one) continue;
+        for (int d = 0; d < 256; d++) cnt[d + 1] += cnt[d];
+        for (size_t v = 0; v < nv; v++) k2[cnt[(k[v].key >> shift) & 255]++] = k[v];
+        mkey *x = k;
+        k = k2;
+        k2 = x;
     }
-    qsort(k, nv, sizeof *k, cmp_mkey);
     for (size_t s = 0; s < nv; s++) {
         perm[s] = k[s].id;
         inv[k[s].id] = (uint32_t)s;
     }
     free(k);
+    free(k2);
     return inv;
+}
+
+static void face_cache_range(void *arg, size_t f0, size_t f1, int part) {
+    (void)part;
+    simp *S = arg;
+    for (size_t f = f0; f < f1; f++) face_update_cache(S, (uint32_t)f);
+}
+
+/* The face-plane quadrics (4.1 (2)-(4)), gathered per vertex over its
+ * faces in increasing face order: the sums of a face-order scatter, in
+ * the same order, so the same bits. With area weights, renormalised per
+ * vertex (method-notes) so that tolerance keeps its units. */
+static void plane_quadrics(void *arg, size_t v0, size_t v1, int part) {
+    (void)part;
+    simp *S = arg;
+    for (size_t v = v0; v < v1; v++) {
+        const uint32_t *fl = S->refs + S->fstart[v];
+        double area = 0.0;
+        for (uint32_t m = 0; m < S->fcount[v]; m++) {
+            const uint32_t *t = S->tri + 3 * (size_t)fl[m];
+            /* the float cache is for checks; the quadric gets the exact normal */
+            double e1[3], e2[3], nn[3], n[3];
+            sub3(e1, P(S, t[1]), P(S, t[0]));
+            sub3(e2, P(S, t[2]), P(S, t[0]));
+            cross3(nn, e1, e2);
+            double l = sqrt(dot3(nn, nn));
+            if (!(l > 0.0)) continue;
+            for (int k = 0; k < 3; k++) n[k] = nn[k] / l;
+            double w = S->area_w ? 0.5 * l : 1.0;
+            fl_quadric_add_plane(S->q + v, n, P(S, t[0]), w);
+            area += w;
+        }
+        if (S->area_w && area > 0.0) fl_quadric_scale(S->q + v, (double)S->fcount[v] / area);
+    }
+}
+
+/* The edge table in parts: part t numbers the edges of its vertices from
+ * 0 (a's sides towards larger neighbours b, in increasing (a, b) order;
+ * tedge gets these local ids), counts valences and keeps its edges in
+ * ev[t], enf[t]; then the parts are laid end to end (off[t]) and
+ * edge_renumber adds each side's part offset: the numbering of one
+ * sequential pass over the vertices. */
+typedef struct edge_ctx {
+    simp *S;
+    int parts;
+    uint32_t *ev[16];
+    uint16_t *enf[16];
+    size_t n[16], off[16];
+    int oom[16];
+} edge_ctx;
+
+static void edge_part(void *arg, size_t a0, size_t a1, int part) {
+    edge_ctx *E = arg;
+    simp *S = E->S;
+    erec *rec = NULL;
+    uint32_t *nb = NULL;
+    size_t cap_rec = 0, cap_nb = 0, ne = 0, cap_e = 0, cap_ev = 0;
+    uint32_t *ev = NULL;
+    uint16_t *enf = NULL;
+    for (size_t a = a0; a < a1; a++) {
+        size_t nrec = 0, nnb = 0;
+        const uint32_t *fl = S->refs + S->fstart[a];
+        uint32_t cnt = S->fcount[a];
+        if (!buf_reserve((void **)&rec, &cap_rec, 2 * (size_t)cnt + 1, sizeof *rec) ||
+            !buf_reserve((void **)&nb, &cap_nb, 2 * (size_t)cnt + 1, sizeof *nb) ||
+            !buf_reserve((void **)&enf, &cap_e, ne + 2 * (size_t)cnt + 1, sizeof *enf)) {
+            E->oom[part] = 1;
+            break;
+        }
+        if (2 * cap_e > cap_ev) { /* ev: two entries per edge of enf's capacity */
+            uint32_t *nev = fl_realloc(ev, 2 * cap_e, sizeof *nev);
+            if (!nev) {
+                E->oom[part] = 1;
+                break;
+            }
+            ev = nev;
+            cap_ev = 2 * cap_e;
+        }
+        for (uint32_t m = 0; m < cnt; m++) {
+            uint32_t f = fl[m];
+            const uint32_t *t = S->tri + 3 * (size_t)f;
+            int c = t[0] == a ? 0 : (t[1] == a ? 1 : 2);
+            int sides[2] = {c, (c + 2) % 3};
+            uint32_t others[2] = {t[(c + 1) % 3], t[(c + 2) % 3]};
+            for (int q = 0; q < 2; q++) {
+                nb[nnb++] = others[q];
+                if (others[q] > a) {
+                    erec r = {others[q], f, (uint32_t)sides[q]};
+                    size_t x = nrec++;
+                    while (x > 0 && erec_less(&r, &rec[x - 1])) {
+                        rec[x] = rec[x - 1];
+                        x--;
+                    }
+                    rec[x] = r;
+                }
+            }
+        }
+        /* valence: distinct neighbours (insertion sort: a few dozen) */
+        for (size_t x = 1; x < nnb; x++) {
+            uint32_t y = nb[x];
+            size_t z = x;
+            while (z > 0 && nb[z - 1] > y) {
+                nb[z] = nb[z - 1];
+                z--;
+            }
+            nb[z] = y;
+        }
+        uint32_t val = 0;
+        for (size_t x = 0; x < nnb; x++)
+            if (x == 0 || nb[x] != nb[x - 1]) val++;
+        S->val[a] = val;
+        for (size_t x = 0; x < nrec;) {
+            size_t y = x;
+            while (y < nrec && rec[y].other == rec[x].other) y++;
+            ev[2 * ne] = (uint32_t)a;
+            ev[2 * ne + 1] = rec[x].other;
+            enf[ne] = (uint16_t)(y - x > 65535 ? 65535 : y - x);
+            for (size_t z = x; z < y; z++) S->tedge[3 * (size_t)rec[z].face + rec[z].side] = (uint32_t)ne;
+            ne++;
+            x = y;
+        }
+    }
+    free(rec);
+    free(nb);
+    E->ev[part] = ev;
+    E->enf[part] = enf;
+    E->n[part] = ne;
+}
+
+static void edge_renumber(void *arg, size_t f0, size_t f1, int part) {
+    edge_ctx *E = arg;
+    simp *S = E->S;
+    size_t nv = S->nv;
+    (void)part;
+    for (size_t f = f0; f < f1; f++) {
+        const uint32_t *t = S->tri + 3 * f;
+        for (int c = 0; c < 3; c++) {
+            uint32_t a = t[c] < t[(c + 1) % 3] ? t[c] : t[(c + 1) % 3];
+            int p = 0;
+            while (p + 1 < E->parts && a >= par_part_lo(nv, E->parts, p + 1)) p++;
+            S->tedge[3 * f + c] += (uint32_t)E->off[p];
+        }
+    }
 }
 
 #if FEMLOD_SIMPLIFY_STATS
@@ -1953,7 +2174,13 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
      * then sit near it in memory, which halves the time on large meshes
      * (docs/simplify.md). Node ids stay the input indices. */
     SETUP_T(0);
-    uint32_t *slot_of = morton_slots(mesh->pos, nv, S->node);
+    /* threads for the set-up's maps (resolve_options checks the option) */
+    int nth = o->threads > 0 ? o->threads : 1;
+    if (o->threads == 0) {
+        long np = sysconf(_SC_NPROCESSORS_ONLN);
+        nth = np < 1 ? 1 : (np > 16 ? 16 : (int)np);
+    }
+    uint32_t *slot_of = morton_slots(mesh->pos, nv, S->node, nth);
     S->slot_of = slot_of;
     if (!slot_of) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     for (size_t s = 0; s < nv; s++) memcpy(S->pos + 3 * s, mesh->pos + 3 * (size_t)S->node[s], 3 * sizeof(double));
@@ -2019,76 +2246,40 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
             S->refs[S->fstart[v] + S->fcount[v]++] = (uint32_t)f;
         }
     SETUP_T(2);
-    for (size_t f = 0; f < nt; f++) face_update_cache(S, (uint32_t)f);
+    par_ranges(nth, nt, face_cache_range, S);
 
     SETUP_T(3);
     /* edges, numbered in increasing (a, b) order: each vertex a lists its
-     * sides towards larger neighbours b */
-    size_t cap_e = 3 * nt + 16; /* E <= 3F; trimmed below */
-    if (!ALLOC(S->ev, 2 * cap_e) || !ALLOC(S->enf, cap_e))
-        return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
-    erec *rec = NULL;
-    uint32_t *nb = NULL;
-    size_t cap_rec = 0, cap_nb = 0, ne = 0;
-    double elen = 0.0;
-    for (size_t a = 0; a < nv; a++) {
-        size_t nrec = 0, nnb = 0;
-        const uint32_t *fl = S->refs + S->fstart[a];
-        uint32_t cnt = S->fcount[a];
-        if (!buf_reserve((void **)&rec, &cap_rec, 2 * (size_t)cnt + 1, sizeof *rec) ||
-            !buf_reserve((void **)&nb, &cap_nb, 2 * (size_t)cnt + 1, sizeof *nb)) {
-            free(rec);
-            free(nb);
-            return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
-        }
-        for (uint32_t m = 0; m < cnt; m++) {
-            uint32_t f = fl[m];
-            const uint32_t *t = S->tri + 3 * (size_t)f;
-            int c = t[0] == a ? 0 : (t[1] == a ? 1 : 2);
-            int sides[2] = {c, (c + 2) % 3};
-            uint32_t others[2] = {t[(c + 1) % 3], t[(c + 2) % 3]};
-            for (int q = 0; q < 2; q++) {
-                nb[nnb++] = others[q];
-                if (others[q] > a) {
-                    erec r = {others[q], f, (uint32_t)sides[q]};
-                    size_t x = nrec++;
-                    while (x > 0 && erec_less(&r, &rec[x - 1])) {
-                        rec[x] = rec[x - 1];
-                        x--;
-                    }
-                    rec[x] = r;
-                }
-            }
-        }
-        qsort(nb, nnb, sizeof *nb, cmp_u32);
-        uint32_t val = 0;
-        for (size_t x = 0; x < nnb; x++)
-            if (x == 0 || nb[x] != nb[x - 1]) val++;
-        S->val[a] = val;
-        for (size_t x = 0; x < nrec;) {
-            size_t y = x;
-            while (y < nrec && rec[y].other == rec[x].other) y++;
-            if (ne == cap_e) { /* cannot happen for 3 sides per face; kept for safety */
-                free(rec);
-                free(nb);
-                return fl_error(err, FEMLOD_ENOMEM, "simplify: edge table overflow");
-            }
-            S->ev[2 * ne] = (uint32_t)a;
-            S->ev[2 * ne + 1] = rec[x].other;
-            S->enf[ne] = (uint16_t)(y - x > 65535 ? 65535 : y - x);
-            for (size_t z = x; z < y; z++) S->tedge[3 * (size_t)rec[z].face + rec[z].side] = (uint32_t)ne;
-            elen += sqrt(dist2(P(S, (uint32_t)a), P(S, rec[x].other)));
-            ne++;
-            x = y;
-        }
+     * sides towards larger neighbours b (edge_part, in parallel parts) */
+    edge_ctx E;
+    memset(&E, 0, sizeof E);
+    E.S = S;
+    E.parts = par_parts(nth, nv);
+    par_ranges(nth, nv, edge_part, &E);
+    size_t ne = 0;
+    int eoom = 0;
+    for (int t = 0; t < E.parts; t++) {
+        E.off[t] = ne;
+        ne += E.n[t];
+        eoom |= E.oom[t];
     }
-    free(rec);
-    free(nb);
+    if (!eoom && (!ALLOC(S->ev, 2 * ne + 2) || !ALLOC(S->enf, ne + 1))) eoom = 1;
+    if (!eoom) {
+        for (int t = 0; t < E.parts; t++) {
+            if (!E.n[t]) continue;
+            memcpy(S->ev + 2 * E.off[t], E.ev[t], 2 * E.n[t] * sizeof *S->ev);
+            memcpy(S->enf + E.off[t], E.enf[t], E.n[t] * sizeof *S->enf);
+        }
+        if (E.parts > 1) par_ranges(nth, nt, edge_renumber, &E);
+    }
+    for (int t = 0; t < E.parts; t++) {
+        free(E.ev[t]);
+        free(E.enf[t]);
+    }
+    if (eoom) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    double elen = 0.0;
+    for (size_t e = 0; e < ne; e++) elen += sqrt(dist2(P(S, S->ev[2 * e]), P(S, S->ev[2 * e + 1])));
     S->ne = ne;
-    uint32_t *ev2 = fl_realloc(S->ev, 2 * ne + 2, sizeof *ev2);
-    if (ev2) S->ev = ev2;
-    uint16_t *enf2 = fl_realloc(S->enf, ne + 1, sizeof *enf2);
-    if (enf2) S->enf = enf2;
     if (!CALLOC(S->eflag, ne + 1) || !CALLOC(S->estate, ne + 1) || !CALLOC(S->emark, ne + 1) || !ALLOC(S->eopt, 3 * ne + 3) ||
         (FEMLOD_SIMPLIFY_BOUND && !ALLOC(S->ehint, 2 * ne + 2)))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
@@ -2154,32 +2345,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     memset(S->vmark, 0, nv * sizeof *S->vmark);
 
     SETUP_T(6);
-    /* quadrics (4.1 (2)-(4)): face planes, optionally area-weighted and
-     * renormalised per vertex (method-notes) so that tolerance keeps units */
-    double *area = NULL;
-    if (S->area_w && !CALLOC(area, nv)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
-    for (size_t f = 0; f < nt; f++) {
-        const uint32_t *t = S->tri + 3 * f;
-        double n[3] = {S->fn[3 * f], S->fn[3 * f + 1], S->fn[3 * f + 2]};
-        /* the float cache is for checks; the quadric gets the exact normal */
-        double e1[3], e2[3], nn[3];
-        sub3(e1, P(S, t[1]), P(S, t[0]));
-        sub3(e2, P(S, t[2]), P(S, t[0]));
-        cross3(nn, e1, e2);
-        double l = sqrt(dot3(nn, nn));
-        if (!(l > 0.0)) continue;
-        for (int k = 0; k < 3; k++) n[k] = nn[k] / l;
-        double w = S->area_w ? 0.5 * l : 1.0;
-        for (int c = 0; c < 3; c++) {
-            fl_quadric_add_plane(S->q + t[c], n, P(S, t[0]), w);
-            if (area) area[t[c]] += w;
-        }
-    }
-    if (area) {
-        for (size_t v = 0; v < nv; v++)
-            if (area[v] > 0.0) fl_quadric_scale(S->q + v, (double)S->fcount[v] / area[v]);
-        free(area);
-    }
+    par_ranges(nth, nv, plane_quadrics, S);
     SETUP_T(7);
     /* features and line quadrics, weighted by sharpness */
     double cos_feat = S->feat_angle > 0.0 ? cos(S->feat_angle * PI / 180.0) : -2.0;
