@@ -988,6 +988,19 @@ static void test_threads(void) {
     o.fast_above = 0.0;
     threads_case(m, o, "fandisk exact 1000, max_deviation and locks");
     femlod_mesh_free(m);
+    /* above 32,768 vertices and faces the set-up runs in parts too (Morton
+     * keys, face caches, plane quadrics, edge table: docs/design.md "The
+     * set-up in parallel parts"); area weights take the quadrics' other
+     * branch */
+    m = load("cover.obj");
+    if (m) {
+        o = (femlod_simplify_options)FEMLOD_SIMPLIFY_OPTIONS_INIT;
+        o.target = 20000;
+        o.fast_above = 2.0;
+        o.area_weighted = 1;
+        threads_case(m, o, "cover fast 20000, area weights");
+        femlod_mesh_free(m);
+    }
     femlod_error err;
     o = (femlod_simplify_options)FEMLOD_SIMPLIFY_OPTIONS_INIT;
     o.threads = -1;
