@@ -177,6 +177,23 @@ typedef struct simp_stats {
     double tstage[4]; /* and their seconds; [3]: in par_for */
 } simp_stats;
 
+/* Per-thread buffers of the checks, grown on demand. */
+typedef struct scratch {
+    uint32_t *ebuf;
+    size_t ebuf_cap;
+    uint32_t *pbuf; /* deviation points */
+    uint32_t *pdst; /* their new face (ring index) */
+    size_t pbuf_cap, pdst_cap;
+    double *tbox; /* per ring face: box of the new triangle */
+    size_t tbox_cap;
+    fl_tri_plane *tplane; /* per ring face: plane of the new triangle */
+    size_t tplane_cap;
+    uint8_t *cert; /* per ring face: star certificates of a and b (intersect_check) */
+    size_t cert_cap;
+    float *newcone; /* per ring face */
+    size_t newcone_cap;
+} scratch;
+
 typedef struct simp {
     /* resolved thresholds */
     size_t target;
@@ -233,21 +250,8 @@ typedef struct simp {
 
     ring R;
     ring R2; /* band_vertex: the best edge's evaluation while others are evaluated */
-    /* scratch */
-    uint32_t *ebuf;
-    size_t ebuf_cap;
-    uint32_t *pbuf; /* deviation points */
-    uint32_t *pdst; /* their new face (ring index) */
-    size_t pbuf_cap, pdst_cap;
-    size_t npts;    /* points gathered by the last deviation check */
-    double *tbox;   /* per ring face: box of the new triangle */
-    size_t tbox_cap;
-    fl_tri_plane *tplane; /* per ring face: plane of the new triangle */
-    uint8_t *cert;        /* per ring face: star certificates of a and b (intersect_check) */
-    size_t cert_cap;
-    size_t tplane_cap;
-    float *newcone; /* per ring face */
-    size_t newcone_cap;
+    scratch sc;  /* each thread's own (simp_view keeps it) */
+    size_t npts; /* points gathered by the last deviation check */
     uint32_t vstars[MAX_VSTARS + 2];
     uint8_t lfaces[3 * 1024];
 
@@ -868,7 +872,7 @@ static double bound_edge(simp *S, ring *R, uint32_t e, uint32_t k) {
 /* {====== expensive checks, run when an edge is popped */
 
 static int cone_check(simp *S, ring *R, const double p[3]) {
-    if (!buf_reserve((void **)&S->newcone, &S->newcone_cap, 4 * R->n, sizeof(float))) {
+    if (!buf_reserve((void **)&S->sc.newcone, &S->sc.newcone_cap, 4 * R->n, sizeof(float))) {
         S->oom = 1;
         return FEMLOD_REJECT_FOLDOVER;
     }
@@ -884,7 +888,7 @@ static int cone_check(simp *S, ring *R, const double p[3]) {
         for (int k = 0; k < 3; k++) n[k] /= l;
         /* the cone holds the input normals the face stands for; the new
          * normal must stay within max_normal_change of all of them */
-        float *c = S->newcone + 4 * r;
+        float *c = S->sc.newcone + 4 * r;
         memcpy(c, S->cone + 4 * (size_t)R->face[r], 4 * sizeof(float));
         /* a removed face's area goes to the new faces at its opposite
          * vertex (merging it into every new face, as PMP does, would mix
@@ -916,32 +920,32 @@ static int deviation_check(simp *S, ring *R, const double p[3], size_t *np) {
                 if (t[0] == R->i || t[1] == R->i || t[2] == R->i) continue;
             }
             for (uint32_t x = S->fpt[f]; x != UINT32_MAX; x = S->pnext[x]) {
-                if (!buf_reserve((void **)&S->pbuf, &S->pbuf_cap, n + 1, sizeof *S->pbuf)) {
+                if (!buf_reserve((void **)&S->sc.pbuf, &S->sc.pbuf_cap, n + 1, sizeof *S->sc.pbuf)) {
                     S->oom = 1;
                     return FEMLOD_REJECT_DEVIATION;
                 }
-                S->pbuf[n++] = x;
+                S->sc.pbuf[n++] = x;
             }
         }
     }
     for (int side = 0; side < 2; side++) {
         uint32_t v = side ? R->j : R->i;
         if (S->node[v] < S->nv) {
-            if (!buf_reserve((void **)&S->pbuf, &S->pbuf_cap, n + 1, sizeof *S->pbuf)) {
+            if (!buf_reserve((void **)&S->sc.pbuf, &S->sc.pbuf_cap, n + 1, sizeof *S->sc.pbuf)) {
                 S->oom = 1;
                 return FEMLOD_REJECT_DEVIATION;
             }
-            S->pbuf[n++] = S->node[v];
+            S->sc.pbuf[n++] = S->node[v];
         }
     }
-    if (!buf_reserve((void **)&S->pdst, &S->pdst_cap, n, sizeof *S->pdst)) {
+    if (!buf_reserve((void **)&S->sc.pdst, &S->sc.pdst_cap, n, sizeof *S->sc.pdst)) {
         S->oom = 1;
         return FEMLOD_REJECT_DEVIATION;
     }
     *np = n;
     if (R->n == 0) return n ? FEMLOD_REJECT_DEVIATION : NO_REASON;
     for (size_t m = 0; m < n; m++) {
-        const double *x = S->pos0 + 3 * (size_t)S->pbuf[m];
+        const double *x = S->pos0 + 3 * (size_t)S->sc.pbuf[m];
         double best = __builtin_inf();
         uint32_t bi = 0;
         for (size_t r = 0; r < R->n; r++) {
@@ -952,7 +956,7 @@ static int deviation_check(simp *S, ring *R, const double p[3], size_t *np) {
             }
         }
         if (best > S->maxdev2) return FEMLOD_REJECT_DEVIATION;
-        S->pdst[m] = bi;
+        S->sc.pdst[m] = bi;
     }
     return NO_REASON;
 }
@@ -1027,8 +1031,8 @@ static inline uint32_t slab_of(const simp *S, const double *p) {
  * overlaps, the triangles being replaced excepted, and against the other new
  * triangles. Shared corners and edges are told to the test by vertex id. */
 static int intersect_check(simp *S, ring *R, const double p[3]) {
-    if (!buf_reserve((void **)&S->tbox, &S->tbox_cap, 6 * R->n + 6, sizeof *S->tbox) ||
-        !buf_reserve((void **)&S->tplane, &S->tplane_cap, R->n + 1, sizeof *S->tplane)) {
+    if (!buf_reserve((void **)&S->sc.tbox, &S->sc.tbox_cap, 6 * R->n + 6, sizeof *S->sc.tbox) ||
+        !buf_reserve((void **)&S->sc.tplane, &S->sc.tplane_cap, R->n + 1, sizeof *S->sc.tplane)) {
         S->oom = 1;
         return FEMLOD_REJECT_INTERSECTION;
     }
@@ -1039,8 +1043,8 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
     for (size_t r = 0; r < R->n; r++) {
         const double *a = P(S, R->a[r]), *b = P(S, R->b[r]);
         const double *T[3] = {p, a, b};
-        fl_tri_plane_of(T, S->tplane + r);
-        double *bx = S->tbox + 6 * r;
+        fl_tri_plane_of(T, S->sc.tplane + r);
+        double *bx = S->sc.tbox + 6 * r;
         for (int k = 0; k < 3; k++) {
             bx[k] = mn(p[k], mn(a[k], b[k])) - S->eps;
             bx[3 + k] = mx(p[k], mx(a[k], b[k])) + S->eps;
@@ -1063,11 +1067,11 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
     /* star certificates of k and of the ring vertices (interior, manifold
      * ones), per new triangle: cert[2r] for a_r, cert[2r+1] for b_r */
     int kcert = 0;
-    if (!buf_reserve((void **)&S->cert, &S->cert_cap, 2 * R->n + 2, 1)) {
+    if (!buf_reserve((void **)&S->sc.cert, &S->sc.cert_cap, 2 * R->n + 2, 1)) {
         S->oom = 1;
         return FEMLOD_REJECT_INTERSECTION;
     }
-    memset(S->cert, 0, 2 * R->n);
+    memset(S->sc.cert, 0, 2 * R->n);
     if (FEMLOD_SIMPLIFY_CERTIFY && !((S->vflag[R->i] | S->vflag[R->j]) & (V_BOUNDARY | V_NONMANIFOLD)) &&
         R->n <= 64) {
         const double *U[64] = {NULL}, *W[64] = {NULL};
@@ -1083,12 +1087,12 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                 /* the same vertex in an earlier triangle: its answer */
                 int known = -1;
                 for (size_t q = 0; q < r && known < 0; q++) {
-                    if (R->a[q] == v) known = S->cert[2 * q];
-                    else if (R->b[q] == v) known = S->cert[2 * q + 1];
+                    if (R->a[q] == v) known = S->sc.cert[2 * q];
+                    else if (R->b[q] == v) known = S->sc.cert[2 * q + 1];
                 }
-                if (known < 0 && e == 1 && R->a[r] == v) known = S->cert[2 * r];
+                if (known < 0 && e == 1 && R->a[r] == v) known = S->sc.cert[2 * r];
                 if (known >= 0) {
-                    S->cert[2 * r + (size_t)e] = (uint8_t)known;
+                    S->sc.cert[2 * r + (size_t)e] = (uint8_t)known;
                     continue;
                 }
                 const uint32_t *fl = S->refs + S->fstart[v];
@@ -1105,7 +1109,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                     W[nf] = y == R->i || y == R->j ? p : P(S, y);
                     nf++;
                 }
-                S->cert[2 * r + (size_t)e] = (uint8_t)star_embedded(P(S, v), U, W, nf);
+                S->sc.cert[2 * r + (size_t)e] = (uint8_t)star_embedded(P(S, v), U, W, nf);
             }
     }
     /* one pass over the cells under the fan; each triangle met once */
@@ -1151,19 +1155,19 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                                 continue;
                         }
                         for (size_t r = 0; r < R->n; r++) {
-                            const double *bx = S->tbox + 6 * r;
+                            const double *bx = S->sc.tbox + 6 * r;
                             if (qb[0] > bx[3] || qb[1] > bx[4] || qb[2] > bx[5] || qb[3] < bx[0] ||
                                 qb[4] < bx[1] || qb[5] < bx[2])
                                 continue;
                             /* both in the certified star of a shared corner */
                             uint32_t ar = R->a[r], br = R->b[r];
-                            if ((S->cert[2 * r] && (t[0] == ar || t[1] == ar || t[2] == ar)) ||
-                                (S->cert[2 * r + 1] && (t[0] == br || t[1] == br || t[2] == br)))
+                            if ((S->sc.cert[2 * r] && (t[0] == ar || t[1] == ar || t[2] == ar)) ||
+                                (S->sc.cert[2 * r + 1] && (t[0] == br || t[1] == br || t[2] == br)))
                                 continue;
                             const double *T[3] = {p, P(S, R->a[r]), P(S, R->b[r])};
                             uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
                             STAT(tritri);
-                            if (fl_tri_tri_intersect_p(T, tid, S->tplane + r, Q, t, S->eps))
+                            if (fl_tri_tri_intersect_p(T, tid, S->sc.tplane + r, Q, t, S->eps))
                                 return FEMLOD_REJECT_INTERSECTION;
                         }
                     }
@@ -1175,15 +1179,15 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
     for (size_t r = 0; r < R->n && !kcert; r++) {
         const double *T[3] = {p, P(S, R->a[r]), P(S, R->b[r])};
         uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
-        const double *br = S->tbox + 6 * r;
+        const double *br = S->sc.tbox + 6 * r;
         for (size_t s2 = r + 1; s2 < R->n; s2++) {
-            const double *bs = S->tbox + 6 * s2;
+            const double *bs = S->sc.tbox + 6 * s2;
             if (br[0] > bs[3] || br[1] > bs[4] || br[2] > bs[5] || br[3] < bs[0] || br[4] < bs[1] ||
                 br[5] < bs[2])
                 continue;
             const double *Q[3] = {p, P(S, R->a[s2]), P(S, R->b[s2])};
             uint32_t qid[3] = {K_ID, R->a[s2], R->b[s2]};
-            if (fl_tri_tri_intersect_p(T, tid, S->tplane + r, Q, qid, S->eps)) return FEMLOD_REJECT_INTERSECTION;
+            if (fl_tri_tri_intersect_p(T, tid, S->sc.tplane + r, Q, qid, S->eps)) return FEMLOD_REJECT_INTERSECTION;
         }
     }
     return NO_REASON;
@@ -1366,7 +1370,7 @@ static int collapse(simp *S, ring *R, int c) {
         for (size_t s = 0; s < R->ns; s++) S->fpt[R->sface[s]] = UINT32_MAX;
         for (size_t r = 0; r < R->n; r++) S->fpt[R->face[r]] = UINT32_MAX;
         for (size_t m = 0; m < S->npts; m++) {
-            uint32_t x = S->pbuf[m], f = R->face[S->pdst[m]];
+            uint32_t x = S->sc.pbuf[m], f = R->face[S->sc.pdst[m]];
             S->pnext[x] = S->fpt[f];
             S->fpt[f] = x;
         }
@@ -1436,7 +1440,7 @@ static int collapse(simp *S, ring *R, int c) {
     for (size_t r = 0; r < R->n; r++) {
         uint32_t f = R->face[r];
         face_update_cache(S, f);
-        if (S->cone_on) memcpy(S->cone + 4 * (size_t)f, S->newcone + 4 * r, 4 * sizeof(float));
+        if (S->cone_on) memcpy(S->cone + 4 * (size_t)f, S->sc.newcone + 4 * r, 4 * sizeof(float));
         if (!grid_add_face(S, f)) return 0;
     }
     S->collapses++;
@@ -1533,15 +1537,15 @@ static int reevaluate_ring(simp *S, uint32_t k) {
                     uint32_t ed = S->tedge[3 * (size_t)f + c];
                     if (S->emark[ed] != vm) {
                         S->emark[ed] = vm;
-                        if (!buf_reserve((void **)&S->ebuf, &S->ebuf_cap, 2 * (ne + 1), sizeof *S->ebuf))
+                        if (!buf_reserve((void **)&S->sc.ebuf, &S->sc.ebuf_cap, 2 * (ne + 1), sizeof *S->sc.ebuf))
                             return 0;
-                        S->ebuf[2 * ne] = ed;
-                        S->ebuf[2 * ne + 1] = (uint32_t)bad;
+                        S->sc.ebuf[2 * ne] = ed;
+                        S->sc.ebuf[2 * ne + 1] = (uint32_t)bad;
                         ne++;
                     } else if (bad) {
                         for (size_t x = ne; x-- > 0;)
-                            if (S->ebuf[2 * x] == ed) {
-                                S->ebuf[2 * x + 1] = 1;
+                            if (S->sc.ebuf[2 * x] == ed) {
+                                S->sc.ebuf[2 * x + 1] = 1;
                                 break;
                             }
                     }
@@ -1561,8 +1565,8 @@ static int reevaluate_ring(simp *S, uint32_t k) {
         return 0;
     size_t nev = 0;
     for (size_t x = 0; x < ne; x++) {
-        uint32_t ed = S->ebuf[2 * x];
-        uint8_t kind = S->phase == 1 || S->ebuf[2 * x + 1] ? RK_EVAL : RK_REMOVE;
+        uint32_t ed = S->sc.ebuf[2 * x];
+        uint8_t kind = S->phase == 1 || S->sc.ebuf[2 * x + 1] ? RK_EVAL : RK_REMOVE;
         if (S->ev[2 * (size_t)ed] == k || S->ev[2 * (size_t)ed + 1] == k) S->estate[ed] &= (uint8_t)~E_OPT;
         else if (S->phase == 1) {
             /* An edge away from k keeps its endpoints, hence its candidates
@@ -1584,7 +1588,7 @@ static int reevaluate_ring(simp *S, uint32_t k) {
     if (S->oom) return 0;
     nev = 0;
     for (size_t x = 0; x < ne; x++) {
-        uint32_t ed = S->ebuf[2 * x];
+        uint32_t ed = S->sc.ebuf[2 * x];
         switch (S->rkind[x]) {
         case RK_BOUND:
             bound_update(S, ed, k);
@@ -1688,29 +1692,20 @@ static void ring_free(ring *R) {
 static void simp_free_scratch(simp *S) {
     ring_free(&S->R);
     ring_free(&S->R2);
-    free(S->ebuf);
-    free(S->pbuf);
-    free(S->pdst);
-    free(S->newcone);
-    free(S->tbox);
-    free(S->tplane);
-    free(S->cert);
+    free(S->sc.ebuf);
+    free(S->sc.pbuf);
+    free(S->sc.pdst);
+    free(S->sc.newcone);
+    free(S->sc.tbox);
+    free(S->sc.tplane);
+    free(S->sc.cert);
 }
 
 /* A worker's view of the run (band_par): the run's state with w's own
  * scratch kept. */
 static void simp_view(simp *w, const simp *S) {
     ring R = w->R, R2 = w->R2;
-    uint32_t *ebuf = w->ebuf, *pbuf = w->pbuf, *pdst = w->pdst;
-    size_t ebuf_cap = w->ebuf_cap, pbuf_cap = w->pbuf_cap, pdst_cap = w->pdst_cap;
-    double *tbox = w->tbox;
-    size_t tbox_cap = w->tbox_cap;
-    fl_tri_plane *tplane = w->tplane;
-    size_t tplane_cap = w->tplane_cap;
-    uint8_t *cert = w->cert;
-    size_t cert_cap = w->cert_cap;
-    float *newcone = w->newcone;
-    size_t newcone_cap = w->newcone_cap;
+    scratch sc = w->sc;
     memcpy(w, S, offsetof(simp, vstars));
     w->phase = S->phase;
     w->fast = S->fast;
@@ -1732,20 +1727,7 @@ static void simp_view(simp *w, const simp *S) {
     w->cancelled = 0;
     w->R = R;
     w->R2 = R2;
-    w->ebuf = ebuf;
-    w->ebuf_cap = ebuf_cap;
-    w->pbuf = pbuf;
-    w->pbuf_cap = pbuf_cap;
-    w->pdst = pdst;
-    w->pdst_cap = pdst_cap;
-    w->tbox = tbox;
-    w->tbox_cap = tbox_cap;
-    w->tplane = tplane;
-    w->tplane_cap = tplane_cap;
-    w->cert = cert;
-    w->cert_cap = cert_cap;
-    w->newcone = newcone;
-    w->newcone_cap = newcone_cap;
+    w->sc = sc;
 }
 
 static void par_ctx_free(struct par_ctx *X);
