@@ -467,10 +467,11 @@ typedef struct femlod_simplify_options {
      * FEMLOD_SIMPLIFY_OFF: the exact order throughout (the default); a value
      * in (0, 1) fails with FEMLOD_EINPUT. */
     double fast_above;
-    /* Threads (docs/design.md "Parallel fast passes" and "The exact queue's
-     * second thread"): 0 (the default) as many as the machine has
-     * processors, at most 16; the fast passes and the full evaluations use
-     * them all, the exact queue two. The result does not depend on it:
+    /* Threads (docs/design.md "The set-up in parallel parts", "Parallel
+     * fast passes" and "The exact queue's second thread"): 0 (the default)
+     * as many as the machine has processors, at most 16; the set-up's
+     * maps, the fast passes and the full evaluations use them all, the
+     * exact queue two. The result does not depend on it:
      * every value gives byte-identical output, log and counts. Negative
      * fails with FEMLOD_EINPUT. */
     int threads;

@@ -2014,45 +2014,41 @@ static void plane_quadrics(void *arg, size_t v0, size_t v1, int part) {
 
 /* The edge table in parts: part t numbers the edges of its vertices from
  * 0 (a's sides towards larger neighbours b, in increasing (a, b) order;
- * tedge gets these local ids), counts valences and keeps its edges in
- * ev[t], enf[t]; then the parts are laid end to end (off[t]) and
- * edge_renumber adds each side's part offset: the numbering of one
- * sequential pass over the vertices. */
+ * tedge gets these local ids) into its own region of S->ev and S->enf,
+ * which starts at at[t] (at most 2 edges per face at a vertex: the
+ * regions cannot overlap), and counts valences; then the regions are
+ * moved down end to end (off[t]) and edge_renumber adds each side's part
+ * offset: the numbering of one sequential pass over the vertices, in the
+ * memory of one table (the unused tail is given back). */
 typedef struct edge_ctx {
     simp *S;
     int parts;
-    uint32_t *ev[16];
-    uint16_t *enf[16];
-    size_t n[16], off[16];
-    int oom[16];
+    size_t at[16], n[16], off[16];
 } edge_ctx;
 
 static void edge_part(void *arg, size_t a0, size_t a1, int part) {
     edge_ctx *E = arg;
     simp *S = E->S;
-    erec *rec = NULL;
-    uint32_t *nb = NULL;
-    size_t cap_rec = 0, cap_nb = 0, ne = 0, cap_e = 0, cap_ev = 0;
-    uint32_t *ev = NULL;
-    uint16_t *enf = NULL;
+    uint32_t *ev = S->ev + 2 * E->at[part];
+    uint16_t *enf = S->enf + E->at[part];
+    size_t ne = 0;
     for (size_t a = a0; a < a1; a++) {
         size_t nrec = 0, nnb = 0;
         const uint32_t *fl = S->refs + S->fstart[a];
         uint32_t cnt = S->fcount[a];
-        if (!buf_reserve((void **)&rec, &cap_rec, 2 * (size_t)cnt + 1, sizeof *rec) ||
-            !buf_reserve((void **)&nb, &cap_nb, 2 * (size_t)cnt + 1, sizeof *nb) ||
-            !buf_reserve((void **)&enf, &cap_e, ne + 2 * (size_t)cnt + 1, sizeof *enf)) {
-            E->oom[part] = 1;
-            break;
-        }
-        if (2 * cap_e > cap_ev) { /* ev: two entries per edge of enf's capacity */
-            uint32_t *nev = fl_realloc(ev, 2 * cap_e, sizeof *nev);
-            if (!nev) {
-                E->oom[part] = 1;
-                break;
+        /* a few dozen sides at most in a mesh; a star of more than 256
+         * faces takes the heap */
+        erec rec_s[512], *rec = rec_s;
+        uint32_t nb_s[512], *nb = nb_s;
+        if (cnt > 256) {
+            rec = fl_alloc(2 * (size_t)cnt, sizeof *rec);
+            nb = fl_alloc(2 * (size_t)cnt, sizeof *nb);
+            if (!rec || !nb) {
+                free(rec);
+                free(nb);
+                E->n[part] = SIZE_MAX;
+                return;
             }
-            ev = nev;
-            cap_ev = 2 * cap_e;
         }
         for (uint32_t m = 0; m < cnt; m++) {
             uint32_t f = fl[m];
@@ -2097,11 +2093,11 @@ static void edge_part(void *arg, size_t a0, size_t a1, int part) {
             ne++;
             x = y;
         }
+        if (rec != rec_s) {
+            free(rec);
+            free(nb);
+        }
     }
-    free(rec);
-    free(nb);
-    E->ev[part] = ev;
-    E->enf[part] = enf;
     E->n[part] = ne;
 }
 
@@ -2237,28 +2233,30 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     memset(&E, 0, sizeof E);
     E.S = S;
     E.parts = par_parts(nth, nv);
+    size_t cap_e = 0;
+    for (int t = 0; t < E.parts; t++) {
+        E.at[t] = cap_e;
+        size_t hi = par_part_lo(nv, E.parts, t + 1);
+        for (size_t a = par_part_lo(nv, E.parts, t); a < hi; a++) cap_e += 2 * (size_t)S->fcount[a];
+    }
+    if (!ALLOC(S->ev, 2 * cap_e + 2) || !ALLOC(S->enf, cap_e + 1))
+        return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     par_ranges(nth, nv, edge_part, &E);
     size_t ne = 0;
-    int eoom = 0;
     for (int t = 0; t < E.parts; t++) {
+        if (E.n[t] == SIZE_MAX) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
         E.off[t] = ne;
-        ne += E.n[t];
-        eoom |= E.oom[t];
-    }
-    if (!eoom && (!ALLOC(S->ev, 2 * ne + 2) || !ALLOC(S->enf, ne + 1))) eoom = 1;
-    if (!eoom) {
-        for (int t = 0; t < E.parts; t++) {
-            if (!E.n[t]) continue;
-            memcpy(S->ev + 2 * E.off[t], E.ev[t], 2 * E.n[t] * sizeof *S->ev);
-            memcpy(S->enf + E.off[t], E.enf[t], E.n[t] * sizeof *S->enf);
+        if (t > 0 && E.n[t]) {
+            memmove(S->ev + 2 * ne, S->ev + 2 * E.at[t], 2 * E.n[t] * sizeof *S->ev);
+            memmove(S->enf + ne, S->enf + E.at[t], E.n[t] * sizeof *S->enf);
         }
-        if (E.parts > 1) par_ranges(nth, nt, edge_renumber, &E);
+        ne += E.n[t];
     }
-    for (int t = 0; t < E.parts; t++) {
-        free(E.ev[t]);
-        free(E.enf[t]);
-    }
-    if (eoom) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    uint32_t *ev2 = fl_realloc(S->ev, 2 * ne + 2, sizeof *ev2);
+    if (ev2) S->ev = ev2;
+    uint16_t *enf2 = fl_realloc(S->enf, ne + 1, sizeof *enf2);
+    if (enf2) S->enf = enf2;
+    if (E.parts > 1) par_ranges(nth, nt, edge_renumber, &E);
     double elen = 0.0;
     for (size_t e = 0; e < ne; e++) elen += sqrt(dist2(P(S, S->ev[2 * e]), P(S, S->ev[2 * e + 1])));
     S->ne = ne;

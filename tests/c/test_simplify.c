@@ -454,6 +454,52 @@ static void test_options(void) {
     femlod_mesh_free(m);
 }
 
+/* A bipyramid over a 300-gon: both apexes have 300 faces, more than the
+ * set-up's edge table keeps on the stack (256), so its heap path runs;
+ * the input's valence 300 breaks max_valence, which the run must report
+ * and never make worse. */
+static void test_high_valence(void) {
+    enum { N = 300 };
+    double pos[3 * (N + 2)];
+    uint32_t tri[3 * 2 * N];
+    for (int k = 0; k < N; k++) {
+        double a = 2.0 * 3.14159265358979323846 * k / N;
+        pos[3 * k] = cos(a);
+        pos[3 * k + 1] = sin(a);
+        pos[3 * k + 2] = 0.0;
+    }
+    pos[3 * N] = pos[3 * N + 1] = 0.0;
+    pos[3 * N + 2] = 1.0;
+    pos[3 * N + 3] = pos[3 * N + 4] = 0.0;
+    pos[3 * N + 5] = -1.0;
+    for (int k = 0; k < N; k++) {
+        uint32_t a = (uint32_t)k, b = (uint32_t)((k + 1) % N);
+        uint32_t *t = tri + 6 * k;
+        t[0] = a, t[1] = b, t[2] = N;         /* top, counter-clockwise from above */
+        t[3] = b, t[4] = a, t[5] = N + 1;     /* bottom */
+    }
+    femlod_mesh *m = NULL;
+    femlod_error err;
+    CHECK(femlod_mesh_create(&m, pos, N + 2, tri, 2 * N, &err) == FEMLOD_OK);
+    if (!m) return;
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = 100;
+    femlod_mesh *out = NULL;
+    femlod_simplify_result res;
+    CHECK(femlod_simplify(&out, NULL, m, &o, &res, &err) == FEMLOD_OK);
+    if (out) {
+        femlod_quality q;
+        CHECK(femlod_mesh_quality(out, &q, NULL) == FEMLOD_OK);
+        CHECK(q.topology.closed && q.topology.manifold && q.topology.oriented);
+        CHECK(q.valence_max <= N);
+        CHECK(res.violating_input > 0);
+        printf("  bipyramid(300): %zu -> %zu triangles (%s), valence max %u, violating input %zu\n", (size_t)(2 * N),
+               out->nt, femlod_stop_reason_name(res.stop_reason), q.valence_max, res.violating_input);
+    }
+    femlod_mesh_free(out);
+    femlod_mesh_free(m);
+}
+
 static void test_shapes(void) {
     run r;
     femlod_mesh *m = shape_icosphere(4);
@@ -1028,6 +1074,7 @@ int main(void) {
     test_intersect_unit();
     test_options();
     test_shapes();
+    test_high_valence();
     test_cancel();
     test_fandisk();
     test_determinism();
