@@ -33,7 +33,7 @@ static int cmp_u32(const void *a, const void *b) {
     return (x > y) - (x < y);
 }
 
-static void sort_u32(uint32_t *v, size_t n) {
+void fl_sort_u32(uint32_t *v, size_t n) {
     if (n > 24) {
         qsort(v, n, sizeof *v, cmp_u32);
         return;
@@ -133,7 +133,7 @@ femlod_status fl_adjacency_build(fl_adjacency *adj, const uint32_t *tri, size_t 
                     adj->vert_nbrs[n++] = c[i];
                 }
         }
-        sort_u32(adj->vert_nbrs + adj->nbr_start[v], n - adj->nbr_start[v]);
+        fl_sort_u32(adj->vert_nbrs + adj->nbr_start[v], n - adj->nbr_start[v]);
     }
 
     /* Edges {a, b}, a < b, numbered in (a, b) order. For b, the smaller

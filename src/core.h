@@ -77,6 +77,14 @@ FL_INTERNAL void *fl_realloc(void *p, size_t count, size_t size);
 
 /* }====== */
 
+/* {====== small sorts */
+
+/* Sorts v[0..n) ascending: insertion sort for the short lists of a vertex
+ * star, qsort above 24 entries (adjacency.c). */
+FL_INTERNAL void fl_sort_u32(uint32_t *v, size_t n);
+
+/* }====== */
+
 /* {====== mesh internals (mesh.c) */
 
 /* Allocates a mesh with uninitialised arrays of nv vertices and nt triangles;

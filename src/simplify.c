@@ -2069,16 +2069,8 @@ static void edge_part(void *arg, size_t a0, size_t a1, int part) {
                 }
             }
         }
-        /* valence: distinct neighbours (insertion sort: a few dozen) */
-        for (size_t x = 1; x < nnb; x++) {
-            uint32_t y = nb[x];
-            size_t z = x;
-            while (z > 0 && nb[z - 1] > y) {
-                nb[z] = nb[z - 1];
-                z--;
-            }
-            nb[z] = y;
-        }
+        /* valence: distinct neighbours */
+        fl_sort_u32(nb, nnb);
         uint32_t val = 0;
         for (size_t x = 0; x < nnb; x++)
             if (x == 0 || nb[x] != nb[x - 1]) val++;
