@@ -305,6 +305,14 @@ double fl_point_tri_dist2(const double p[3], const double a[3], const double b[3
 
 /* {====== grid */
 
+_Static_assert(sizeof(fl_grid_block) == 64, "a grid block is one cache line");
+
+/* The block pool, aligned to cache lines (a block read is one line). */
+static fl_grid_block *blocks_alloc(size_t n) {
+    if (n == 0 || n > SIZE_MAX / sizeof(fl_grid_block)) return NULL;
+    return aligned_alloc(64, n * sizeof(fl_grid_block));
+}
+
 int fl_grid_init(fl_grid *g, const double lo[3], const double hi[3], double h, size_t max_cells) {
     memset(g, 0, sizeof *g);
     if (!(h > 0.0)) h = 1.0;
@@ -327,7 +335,7 @@ int fl_grid_init(fl_grid *g, const double lo[3], const double hi[3], double h, s
     size_t cells = (size_t)g->n[0] * (size_t)g->n[1] * (size_t)g->n[2];
     g->cell = fl_alloc(cells, sizeof *g->cell);
     g->capblocks = cells / 2 + 1024;
-    g->blocks = fl_alloc(g->capblocks, sizeof *g->blocks);
+    g->blocks = blocks_alloc(g->capblocks);
     g->free_block = UINT32_MAX;
     if (!g->cell || !g->blocks) {
         fl_grid_free(g);
@@ -364,8 +372,10 @@ static uint32_t new_block(fl_grid *g) {
     if (g->nblocks == g->capblocks) {
         size_t cap = g->capblocks * 2;
         if (cap >= UINT32_MAX) return UINT32_MAX;
-        fl_grid_block *nb = fl_realloc(g->blocks, cap, sizeof *nb);
+        fl_grid_block *nb = blocks_alloc(cap);
         if (!nb) return UINT32_MAX;
+        memcpy(nb, g->blocks, g->nblocks * sizeof *nb);
+        free(g->blocks);
         g->blocks = nb;
         g->capblocks = cap;
     }
@@ -401,7 +411,9 @@ int fl_grid_insert(fl_grid *g, uint32_t item, const double lo[3], const double h
                     g->blocks[b].next = g->cell[c].head;
                     g->cell[c].head = b;
                 }
-                g->blocks[g->cell[c].head].item[fill] = item;
+                fl_grid_block *B = g->blocks + g->cell[c].head;
+                B->item[fill] = item;
+                B->first[fill] = (uint8_t)((x == c0[0]) | ((y == c0[1]) << 1) | ((z == c0[2]) << 2));
                 g->cell[c].count++;
             }
     return 1;
@@ -424,6 +436,7 @@ void fl_grid_remove(fl_grid *g, uint32_t item, const double lo[3], const double 
                     for (uint32_t s = 0; s < lim; s++)
                         if (g->blocks[b].item[s] == item) {
                             g->blocks[b].item[s] = g->blocks[hb].item[last];
+                            g->blocks[b].first[s] = g->blocks[hb].first[last];
                             found = 1;
                             break;
                         }

@@ -38,12 +38,23 @@ FL_INTERNAL double fl_point_tri_dist2(const double p[3], const double a[3], cons
  * so a point that leaves the original box stays findable. Cell lists are
  * chains of fixed blocks from one pool: no allocation per cell. */
 
-#define FL_GRID_BLOCK 7
+#define FL_GRID_BLOCK 12
 
+/* One cache line (the pool is 64-byte aligned). first[s] tells, by bits
+ * 1, 2, 4 for x, y, z, whether this cell is the first cell of item[s]'s box
+ * along that axis: a query over cells [c0, c1] meets an item once, in the
+ * cell where every axis has its bit set or is the query's first
+ * coordinate, without reading the item's box (FL_GRID_ONCE). */
 typedef struct fl_grid_block {
     uint32_t item[FL_GRID_BLOCK];
+    uint8_t first[FL_GRID_BLOCK];
     uint32_t next;
 } fl_grid_block;
+
+/* The bits an item's first[] must hold to be met in cell (x, y, z) of a
+ * query starting at c0: an item is met there when (first & need) == need. */
+#define FL_GRID_NEED(x, y, z, c0) \
+    ((uint8_t)(((x) != (c0)[0]) | (((y) != (c0)[1]) << 1) | (((z) != (c0)[2]) << 2)))
 
 typedef struct fl_grid_cell_info {
     uint32_t head;  /* first block (the partly filled one), UINT32_MAX if none */

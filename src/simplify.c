@@ -1127,11 +1127,18 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                 uint32_t cnt = S->grid.cell[cell].count;
                 uint32_t blk = S->grid.cell[cell].head;
                 uint32_t lim = cnt ? (cnt - 1) % FL_GRID_BLOCK + 1 : 0;
+                /* each triangle met once, in the first walked cell of its
+                 * box (the box it was inserted with: its corners have not
+                 * moved since), told by the block's first-cell bits without
+                 * reading the triangle; not by a mark, which would be a
+                 * write to a face a fast-pass worker does not own */
+                uint8_t need = FL_GRID_NEED(x, y, z, c0);
                 while (blk != UINT32_MAX) {
                     const fl_grid_block *B = S->grid.blocks + blk;
                     for (uint32_t s = 0; s < lim; s++) {
-                        uint32_t f = B->item[s];
                         STAT(items);
+                        if ((B->first[s] & need) != need) continue; /* met in an earlier cell */
+                        uint32_t f = B->item[s];
                         if (f >= fmin && f <= fmax && ring_has_face(R, f)) continue; /* being replaced */
                         const uint32_t *t = S->tri + 3 * (size_t)f;
                         const double *Q[3] = {P(S, t[0]), P(S, t[1]), P(S, t[2])};
@@ -1143,17 +1150,6 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                         if (qb[0] > hi[0] || qb[1] > hi[1] || qb[2] > hi[2] || qb[3] < lo[0] ||
                             qb[4] < lo[1] || qb[5] < lo[2])
                             continue;
-                        /* met once: in the first walked cell of its box (the
-                         * box it was inserted with: its corners have not
-                         * moved since), not by a mark, which would be a write
-                         * to a face a fast-pass worker does not own */
-                        {
-                            int fx = fl_grid_coord(&S->grid, qb[0], 0), fy = fl_grid_coord(&S->grid, qb[1], 1),
-                                fz = fl_grid_coord(&S->grid, qb[2], 2);
-                            if (x != (fx > c0[0] ? fx : c0[0]) || y != (fy > c0[1] ? fy : c0[1]) ||
-                                z != (fz > c0[2] ? fz : c0[2]))
-                                continue;
-                        }
                         for (size_t r = 0; r < R->n; r++) {
                             const double *bx = S->sc.tbox + 6 * r;
                             if (qb[0] > bx[3] || qb[1] > bx[4] || qb[2] > bx[5] || qb[3] < bx[0] ||
