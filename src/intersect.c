@@ -307,10 +307,20 @@ double fl_point_tri_dist2(const double p[3], const double a[3], const double b[3
 
 _Static_assert(sizeof(fl_grid_block) == 64, "a grid block is one cache line");
 
-/* The block pool, aligned to cache lines (a block read is one line). */
-static fl_grid_block *blocks_alloc(size_t n) {
-    if (n == 0 || n > SIZE_MAX / sizeof(fl_grid_block)) return NULL;
-    return aligned_alloc(64, n * sizeof(fl_grid_block));
+/* The block pool, aligned to cache lines (a block read is one line):
+ * grown with realloc (which moves large pools by remapping, not copying,
+ * and never holds two pools at once), then shifted when the alignment
+ * offset changed. 0 on ENOMEM (the old pool is kept). */
+static int blocks_resize(fl_grid *g, size_t n) {
+    if (n == 0 || n > SIZE_MAX / sizeof(fl_grid_block) - 1) return 0;
+    size_t old = g->blocks ? (size_t)((char *)g->blocks - (char *)g->blocks_mem) : 0;
+    char *m = fl_realloc(g->blocks_mem, n + 1, sizeof(fl_grid_block));
+    if (!m) return 0;
+    size_t off = (size_t)(-(uintptr_t)m & 63u);
+    if (g->blocks && off != old) memmove(m + off, m + old, g->nblocks * sizeof(fl_grid_block));
+    g->blocks_mem = m;
+    g->blocks = (fl_grid_block *)(void *)(m + off);
+    return 1;
 }
 
 int fl_grid_init(fl_grid *g, const double lo[3], const double hi[3], double h, size_t max_cells) {
@@ -335,9 +345,8 @@ int fl_grid_init(fl_grid *g, const double lo[3], const double hi[3], double h, s
     size_t cells = (size_t)g->n[0] * (size_t)g->n[1] * (size_t)g->n[2];
     g->cell = fl_alloc(cells, sizeof *g->cell);
     g->capblocks = cells / 2 + 1024;
-    g->blocks = blocks_alloc(g->capblocks);
     g->free_block = UINT32_MAX;
-    if (!g->cell || !g->blocks) {
+    if (!g->cell || !blocks_resize(g, g->capblocks)) {
         fl_grid_free(g);
         return 0;
     }
@@ -350,7 +359,7 @@ int fl_grid_init(fl_grid *g, const double lo[3], const double hi[3], double h, s
 
 void fl_grid_free(fl_grid *g) {
     free(g->cell);
-    free(g->blocks);
+    free(g->blocks_mem);
     memset(g, 0, sizeof *g);
 }
 
@@ -372,11 +381,7 @@ static uint32_t new_block(fl_grid *g) {
     if (g->nblocks == g->capblocks) {
         size_t cap = g->capblocks * 2;
         if (cap >= UINT32_MAX) return UINT32_MAX;
-        fl_grid_block *nb = blocks_alloc(cap);
-        if (!nb) return UINT32_MAX;
-        memcpy(nb, g->blocks, g->nblocks * sizeof *nb);
-        free(g->blocks);
-        g->blocks = nb;
+        if (!blocks_resize(g, cap)) return UINT32_MAX;
         g->capblocks = cap;
     }
     return (uint32_t)g->nblocks++;

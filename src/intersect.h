@@ -65,7 +65,8 @@ typedef struct fl_grid {
     double origin[3], inv_h, h;
     int n[3];
     fl_grid_cell_info *cell; /* per cell; head and count together: one cache line per cell visited */
-    fl_grid_block *blocks;
+    fl_grid_block *blocks; /* in blocks_mem, aligned to 64 bytes */
+    void *blocks_mem;
     size_t nblocks, capblocks;
     uint32_t free_block;
     size_t nfree;  /* blocks on the free list */
