@@ -174,7 +174,7 @@ typedef struct simp_stats {
     size_t attempts, attempt_low, attempt_fresh;
     double t[6]; /* seconds: setup, pre-phase, first evaluation of the passes, passes, queue, output */
     size_t listed[4]; /* parallel passes: vertices listed in stage 0, 1, the remainder; sub-passes */
-    double tstage[4]; /* and their seconds; [3]: in par_for */
+    double tstage[10]; /* and their seconds; [3]: in par_for */
 } simp_stats;
 
 /* Per-thread buffers of the checks, grown on demand. */
@@ -1844,6 +1844,7 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
  * writes; cut into contiguous ranges, one per thread, they give the same
  * bytes for any thread count. */
 
+
 typedef void (*range_fn)(void *ctx, size_t lo, size_t hi, int part);
 
 typedef struct range_job {
@@ -2834,6 +2835,17 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
 #define PAR_MAX_SLABS 64    /* slabs along the axis at most (wider slabs beyond) */
 #define PAR_MIN_LEFT 4096   /* triangles above the floor below which a pass runs sequentially */
 #define PAR_CHUNK 16384     /* edges per task of the first evaluation */
+/* Face-list arena slice per listed vertex of a task: a visit appends a
+ * list only when it collapses (k's faces, about 6), and about one visit in
+ * eight does (cover x4), so 3 is about twice the need; a task whose slice
+ * runs out defers its visit (par_ring_owned), which the deferral rules
+ * make thread-independent. The whole slice is consumed until the next
+ * compaction, so a smaller slice means fewer compactions: 8 gave the same
+ * output on the 21 digest cases and cover x4, with compactions taking 0.28
+ * instead of 0.13 s of one thread at 50,000. */
+#ifndef PAR_REFS_PER_VISIT
+#define PAR_REFS_PER_VISIT 3
+#endif
 
 typedef struct par_task {
     uint32_t slab;
@@ -3088,11 +3100,15 @@ static size_t par_tasks(par_ctx *X, size_t nslab, unsigned col, size_t floor_liv
         memset(S->emark, 0, S->ne * sizeof *S->emark);
         S->stamp = 0;
     }
-    /* face lists: a slice per task, enough for a collapse per two visits */
+    /* face lists: a slice per task (PAR_REFS_PER_VISIT) */
     size_t need = 0;
-    for (size_t k = 0; k < n; k++) need += 8 * (X->task[k].hi - X->task[k].lo) + 256;
+    for (size_t k = 0; k < n; k++) need += PAR_REFS_PER_VISIT * (X->task[k].hi - X->task[k].lo) + 256;
     if (S->nrefs + need > S->caprefs) {
+#if FEMLOD_SIMPLIFY_STATS
+        double tc0 = now_seconds();
+#endif
         if (!compact_refs(S)) return (size_t)-1;
+        STAT_TIME_ST(9, tc0);
         if (S->nrefs + need > S->caprefs) {
             size_t cap = S->nrefs + 2 * need;
             uint32_t *nr = fl_realloc(S->refs, cap, sizeof *nr);
@@ -3106,7 +3122,7 @@ static size_t par_tasks(par_ctx *X, size_t nslab, unsigned col, size_t floor_liv
         par_task *t = X->task + k;
         size_t len = t->hi - t->lo;
         t->refs_lo = at;
-        at += 8 * len + 256;
+        at += PAR_REFS_PER_VISIT * len + 256;
         t->refs_hi = at;
         t->budget = (size_t)((double)left * (double)len / (double)total);
         /* grid blocks: the pool the task slot kept, topped up */
@@ -3176,10 +3192,14 @@ static size_t band_par_pass(simp *S, par_ctx *X, double tau, size_t floor_live, 
     /* stage 0's vertices: those a visit could collapse */
     u32vec *in = &X->tmp;
     in->n = 0;
+#if FEMLOD_SIMPLIFY_STATS
+    double tl0 = now_seconds();
+#endif
     for (uint32_t v = 0; v < S->nv; v++) {
         if ((S->vflag[v] & V_DEAD) || !S->fcount[v]) continue;
         if (S->vlock[v] != S->pass && S->vbest[v] >= ftau && !u32vec_push(in, v)) return (size_t)-1;
     }
+    STAT_TIME_ST(4, tl0);
     size_t done = 0;
     u32vec deferred = {NULL, 0, 0};
     for (int stage = 0; stage < 2; stage++) {
@@ -3188,7 +3208,11 @@ static size_t band_par_pass(simp *S, par_ctx *X, double tau, size_t floor_live, 
         double ts = now_seconds();
 #endif
         S->slab_shift = stage ? w / 2 : 0;
+#if FEMLOD_SIMPLIFY_STATS
+        double tb0 = now_seconds();
+#endif
         size_t nslab = par_bucket(X, in);
+        STAT_TIME_ST(5, tb0);
         if (!nslab) {
             free(deferred.v);
             return (size_t)-1;
@@ -3196,7 +3220,11 @@ static size_t band_par_pass(simp *S, par_ctx *X, double tau, size_t floor_live, 
         deferred.n = 0;
         for (unsigned col = 0; col < 2; col++) {
             if (S->live <= floor_live) break;
+#if FEMLOD_SIMPLIFY_STATS
+            double tt0 = now_seconds();
+#endif
             size_t n = par_tasks(X, nslab, col, floor_live);
+            STAT_TIME_ST(6, tt0);
             if (n == (size_t)-1) {
                 free(deferred.v);
                 return (size_t)-1;
@@ -3210,7 +3238,11 @@ static size_t band_par_pass(simp *S, par_ctx *X, double tau, size_t floor_live, 
 #if FEMLOD_SIMPLIFY_STATS
             S->stats.listed[3]++;
 #endif
+#if FEMLOD_SIMPLIFY_STATS
+            double tm0 = now_seconds();
+#endif
             size_t c = par_merge(X, n, &deferred);
+            STAT_TIME_ST(7, tm0);
             if (c == (size_t)-1) {
                 free(deferred.v);
                 return (size_t)-1;
@@ -3246,7 +3278,11 @@ static size_t band_par_pass(simp *S, par_ctx *X, double tau, size_t floor_live, 
     }
     STAT_TIME_ST(2, ts);
     /* the grid follows the mesh's coarsening between passes */
+#if FEMLOD_SIMPLIFY_STATS
+    double tg0 = now_seconds();
+#endif
     if (S->live * 4 < S->grid_live && S->live > 64 && !build_grid(S, S->grid_h * 2.0)) return (size_t)-1;
+    STAT_TIME_ST(8, tg0);
     return done;
 }
 
@@ -3563,6 +3599,7 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
     fprintf(stderr, "band attempts %zu, below tau on re-evaluation %zu\n", S->stats.attempts, S->stats.attempt_low);
     fprintf(stderr, "parallel passes: listed %zu / %zu / %zu, seconds %.3f / %.3f / %.3f; %zu sub-passes, %.3f s in tasks\n", S->stats.listed[0],
             S->stats.listed[1], S->stats.listed[2], S->stats.tstage[0], S->stats.tstage[1], S->stats.tstage[2], S->stats.listed[3], S->stats.tstage[3]);
+    fprintf(stderr, "outside tasks: listing %.3f bucket %.3f tasks %.3f (compaction %.3f) merge %.3f grid %.3f\n", S->stats.tstage[4], S->stats.tstage[5], S->stats.tstage[6], S->stats.tstage[9], S->stats.tstage[7], S->stats.tstage[8]);
     {
         const simp_stats *c = &S->stats;
         double n = S->collapses ? (double)S->collapses : 1.0;
