@@ -49,27 +49,33 @@ static int grow(void **p, size_t *cap, size_t need, size_t elem) {
     return 1;
 }
 
+/* Room for n more collapses in the per-collapse arrays (doubling). */
+static int reserve_collapses(femlod_collapse_log *log, size_t n) {
+    if (log->n + n <= log->cap) return 1;
+    size_t c = log->cap * 2;
+    if (c < log->n + n) c = log->n + n;
+    uint32_t *pair = fl_realloc(log->pair, 2 * c, sizeof *pair);
+    if (!pair) return 0;
+    log->pair = pair;
+    double *p = fl_realloc(log->pos, 3 * c, sizeof *p);
+    if (!p) return 0;
+    log->pos = p;
+    double *es = fl_realloc(log->e_size, c, sizeof *es);
+    if (!es) return 0;
+    log->e_size = es;
+    uint32_t *vs = fl_realloc(log->vstar_start, c + 1, sizeof *vs);
+    if (!vs) return 0;
+    log->vstar_start = vs;
+    uint32_t *fs = fl_realloc(log->face_start, c + 1, sizeof *fs);
+    if (!fs) return 0;
+    log->face_start = fs;
+    log->cap = c;
+    return 1;
+}
+
 int fl_log_add(femlod_collapse_log *log, uint32_t i, uint32_t j, const double pos[3], double e_size,
                const uint32_t *vstars, size_t nvstars, const uint8_t *faces, size_t nfaces) {
-    if (log->n == log->cap) {
-        size_t c = log->cap * 2;
-        uint32_t *pair = fl_realloc(log->pair, 2 * c, sizeof *pair);
-        if (!pair) return 0;
-        log->pair = pair;
-        double *p = fl_realloc(log->pos, 3 * c, sizeof *p);
-        if (!p) return 0;
-        log->pos = p;
-        double *es = fl_realloc(log->e_size, c, sizeof *es);
-        if (!es) return 0;
-        log->e_size = es;
-        uint32_t *vs = fl_realloc(log->vstar_start, c + 1, sizeof *vs);
-        if (!vs) return 0;
-        log->vstar_start = vs;
-        uint32_t *fs = fl_realloc(log->face_start, c + 1, sizeof *fs);
-        if (!fs) return 0;
-        log->face_start = fs;
-        log->cap = c;
-    }
+    if (!reserve_collapses(log, 1)) return 0;
     size_t v0 = log->vstar_start[log->n], f0 = log->face_start[log->n];
     if (v0 + nvstars > UINT32_MAX || f0 + nfaces > UINT32_MAX) return 0;
     void *vp = log->vstars, *fp = log->faces;
@@ -92,21 +98,40 @@ int fl_log_add(femlod_collapse_log *log, uint32_t i, uint32_t j, const double po
     return 1;
 }
 
+/* The records of src appended in one piece: the same bytes as adding them
+ * one by one with their node ids >= from raised by shift, without a call
+ * and a capacity check per record (the fast passes merge a log per task). */
 int fl_log_merge(femlod_collapse_log *dst, const femlod_collapse_log *src, uint32_t from, uint32_t shift) {
-    uint32_t vs[256];
-    for (size_t c = 0; c < src->n; c++) {
-        size_t v0 = src->vstar_start[c], nvs = src->vstar_start[c + 1] - v0;
-        size_t f0 = src->face_start[c], nf = src->face_start[c + 1] - f0;
-        if (nvs > sizeof vs / sizeof vs[0]) return 0;
-        for (size_t k = 0; k < nvs; k++) {
-            uint32_t id = src->vstars[v0 + k];
-            vs[k] = id >= from ? id + shift : id;
-        }
-        uint32_t i = src->pair[2 * c], j = src->pair[2 * c + 1];
-        if (!fl_log_add(dst, i >= from ? i + shift : i, j >= from ? j + shift : j, src->pos + 3 * c, src->e_size[c],
-                        vs, nvs, src->faces + 3 * f0, nf))
-            return 0;
+    size_t n = src->n, d = dst->n;
+    if (n == 0) return 1;
+    size_t nvs = src->vstar_start[n] - src->vstar_start[0], nf = src->face_start[n] - src->face_start[0];
+    size_t v0 = dst->vstar_start[d], f0 = dst->face_start[d];
+    if (v0 + nvs > UINT32_MAX || f0 + nf > UINT32_MAX) return 0;
+    if (!reserve_collapses(dst, n)) return 0;
+    void *vp = dst->vstars, *fp = dst->faces;
+    size_t fcap3 = 3 * dst->cap_faces;
+    if (!grow(&vp, &dst->cap_vstars, v0 + nvs, sizeof *dst->vstars)) return 0;
+    dst->vstars = vp;
+    if (!grow(&fp, &fcap3, 3 * (f0 + nf), 1)) return 0;
+    dst->faces = fp;
+    dst->cap_faces = fcap3 / 3;
+    for (size_t k = 0; k < 2 * n; k++) {
+        uint32_t id = src->pair[k];
+        dst->pair[2 * d + k] = id >= from ? id + shift : id;
     }
+    memcpy(dst->pos + 3 * d, src->pos, 3 * n * sizeof *src->pos);
+    memcpy(dst->e_size + d, src->e_size, n * sizeof *src->e_size);
+    const uint32_t *sv = src->vstars + src->vstar_start[0];
+    for (size_t k = 0; k < nvs; k++) {
+        uint32_t id = sv[k];
+        dst->vstars[v0 + k] = id >= from ? id + shift : id;
+    }
+    memcpy(dst->faces + 3 * f0, src->faces + 3 * (size_t)src->face_start[0], 3 * nf);
+    for (size_t c = 1; c <= n; c++) {
+        dst->vstar_start[d + c] = (uint32_t)(v0 + src->vstar_start[c] - src->vstar_start[0]);
+        dst->face_start[d + c] = (uint32_t)(f0 + src->face_start[c] - src->face_start[0]);
+    }
+    dst->n = d + n;
     return 1;
 }
 
