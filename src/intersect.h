@@ -44,7 +44,7 @@ FL_INTERNAL double fl_point_tri_dist2(const double p[3], const double a[3], cons
  * 1, 2, 4 for x, y, z, whether this cell is the first cell of item[s]'s box
  * along that axis: a query over cells [c0, c1] meets an item once, in the
  * cell where every axis has its bit set or is the query's first
- * coordinate, without reading the item's box (FL_GRID_ONCE). */
+ * coordinate, without reading the item's box (FL_GRID_NEED). */
 typedef struct fl_grid_block {
     uint32_t item[FL_GRID_BLOCK];
     uint8_t first[FL_GRID_BLOCK];
