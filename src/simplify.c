@@ -174,7 +174,9 @@ typedef struct simp_stats {
     size_t attempts, attempt_low, attempt_fresh;
     double t[6]; /* seconds: setup, pre-phase, first evaluation of the passes, passes, queue, output */
     size_t listed[4]; /* parallel passes: vertices listed in stage 0, 1, the remainder; sub-passes */
-    double tstage[10]; /* and their seconds; [3]: in par_for */
+    /* and their seconds; [3]: in par_for; [4..9]: listing, bucketing, task
+     * set-up, merge, grid rebuilds, compactions */
+    double tstage[10];
 } simp_stats;
 
 /* Per-thread buffers of the checks, grown on demand. */
@@ -2837,9 +2839,9 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
 #define PAR_CHUNK 16384     /* edges per task of the first evaluation */
 /* Face-list arena slice per listed vertex of a task: a visit appends a
  * list only when it collapses (k's faces, about 6), and about one visit in
- * eight does (cover x4), so 3 is about twice the need; a task whose slice
- * runs out defers its visit (par_ring_owned), which the deferral rules
- * make thread-independent. The whole slice is consumed until the next
+ * eight does (cover x4), so 3 is about four times the mean need; a task
+ * whose slice runs out defers its visit (par_ring_owned), which the
+ * deferral rules make thread-independent. The whole slice is consumed until the next
  * compaction, so a smaller slice means fewer compactions: 8 gave the same
  * output on the 21 digest cases and cover x4, with compactions taking 0.28
  * instead of 0.13 s of one thread at 50,000. */
