@@ -919,6 +919,74 @@ static void test_intersect_unit(void) {
     CHECK_NEAR(fl_point_tri_dist2(f, a, b, c), 0.5 * 0.5 * 2 * 1.5 * 1.5 / 0.5 / 4.5 * 4.5 / 4.5, 10);
 }
 
+static double grid_rnd(unsigned *seed) {
+    *seed = *seed * 1103515245u + 12345u;
+    return (double)(*seed >> 8 & 0xffff) / 65535.0;
+}
+
+/* The grid (intersect.h): a query over a cell range meets every item
+ * whose cell range overlaps it exactly once by the first-cell bits
+ * (FL_GRID_NEED), and no other; items removed are gone, the bits follow
+ * the entries moved by removal, the pool stays aligned when it grows, and
+ * boxes beyond the grid's box clamp to its border cells. */
+static void test_grid(void) {
+    enum { N = 8000, Q = 400 };
+    static double box[N][6];
+    static int alive[N], met[N];
+    double glo[3] = {0, 0, 0}, ghi[3] = {10, 10, 10};
+    fl_grid g;
+    CHECK(fl_grid_init(&g, glo, ghi, 1.0, 64)); /* 64 cells at most: cells grow, the pool must too */
+    unsigned seed = 12345;
+    for (int i = 0; i < N; i++) {
+        for (int k = 0; k < 3; k++) {
+            double c = -2.0 + 14.0 * grid_rnd(&seed), w = 3.0 * grid_rnd(&seed);
+            w *= grid_rnd(&seed);
+            box[i][k] = c - w;
+            box[i][3 + k] = c + w;
+        }
+        alive[i] = fl_grid_insert(&g, (uint32_t)i, box[i], box[i] + 3);
+        CHECK(alive[i]);
+    }
+    CHECK(((uintptr_t)g.blocks & 63u) == 0);
+    CHECK(g.capblocks > 64 / 2 + 1024); /* it grew */
+    for (int i = 0; i < N; i += 3) {
+        fl_grid_remove(&g, (uint32_t)i, box[i], box[i] + 3);
+        alive[i] = 0;
+    }
+    int bad = 0, total = 0;
+    for (int q = 0; q < Q; q++) {
+        double lo[3], hi[3];
+        for (int k = 0; k < 3; k++) {
+            double c = -2.0 + 14.0 * grid_rnd(&seed), w = 2.0 * grid_rnd(&seed);
+            lo[k] = c - w;
+            hi[k] = c + w;
+        }
+        int c0[3], c1[3];
+        fl_grid_range(&g, lo, hi, c0, c1);
+        memset(met, 0, sizeof met);
+        for (int z = c0[2]; z <= c1[2]; z++)
+            for (int y = c0[1]; y <= c1[1]; y++)
+                for (int x = c0[0]; x <= c1[0]; x++) {
+                    const fl_grid_cell_info *ci = g.cell + fl_grid_cell(&g, x, y, z);
+                    uint32_t lim = ci->count ? (ci->count - 1) % FL_GRID_BLOCK + 1 : 0;
+                    uint8_t need = FL_GRID_NEED(x, y, z, c0);
+                    for (uint32_t b = ci->head; b != UINT32_MAX; b = g.blocks[b].next, lim = FL_GRID_BLOCK)
+                        for (uint32_t e = 0; e < lim; e++)
+                            if ((g.blocks[b].first[e] & need) == need) met[g.blocks[b].item[e]]++;
+                }
+        for (int i = 0; i < N; i++) {
+            int f0[3], f1[3], overlap = alive[i];
+            fl_grid_range(&g, box[i], box[i] + 3, f0, f1);
+            for (int k = 0; k < 3; k++) overlap &= f0[k] <= c1[k] && f1[k] >= c0[k];
+            bad += met[i] != overlap;
+            total += met[i];
+        }
+    }
+    CHECK(bad == 0);
+    CHECK(total > Q); /* the queries met items */
+    fl_grid_free(&g);
+}
+
 /* Fast passes (options.fast_above): the same promises as the exact order
  * (simplify_checked: thresholds, topology, no folds, no crossings, the log
  * replays), the exact queue finishing below F * target, byte-identical
@@ -1072,6 +1140,7 @@ static void test_threads(void) {
 
 int main(void) {
     test_intersect_unit();
+    test_grid();
     test_options();
     test_shapes();
     test_high_valence();
