@@ -73,11 +73,12 @@ static int reserve_collapses(femlod_collapse_log *log, size_t n) {
     return 1;
 }
 
-int fl_log_add(femlod_collapse_log *log, uint32_t i, uint32_t j, const double pos[3], double e_size,
-               const uint32_t *vstars, size_t nvstars, const uint8_t *faces, size_t nfaces) {
-    if (!reserve_collapses(log, 1)) return 0;
+/* Room for n more collapses with nvstars vstars and nfaces faces in all;
+ * 0 on ENOMEM or when the offsets would pass 32 bits. */
+static int reserve(femlod_collapse_log *log, size_t n, size_t nvstars, size_t nfaces) {
     size_t v0 = log->vstar_start[log->n], f0 = log->face_start[log->n];
     if (v0 + nvstars > UINT32_MAX || f0 + nfaces > UINT32_MAX) return 0;
+    if (!reserve_collapses(log, n)) return 0;
     void *vp = log->vstars, *fp = log->faces;
     size_t fcap3 = 3 * log->cap_faces;
     if (!grow(&vp, &log->cap_vstars, v0 + nvstars, sizeof *log->vstars)) return 0;
@@ -85,6 +86,13 @@ int fl_log_add(femlod_collapse_log *log, uint32_t i, uint32_t j, const double po
     if (!grow(&fp, &fcap3, 3 * (f0 + nfaces), 1)) return 0;
     log->faces = fp;
     log->cap_faces = fcap3 / 3;
+    return 1;
+}
+
+int fl_log_add(femlod_collapse_log *log, uint32_t i, uint32_t j, const double pos[3], double e_size,
+               const uint32_t *vstars, size_t nvstars, const uint8_t *faces, size_t nfaces) {
+    if (!reserve(log, 1, nvstars, nfaces)) return 0;
+    size_t v0 = log->vstar_start[log->n], f0 = log->face_start[log->n];
     size_t c = log->n;
     log->pair[2 * c] = i;
     log->pair[2 * c + 1] = j;
@@ -105,16 +113,8 @@ int fl_log_merge(femlod_collapse_log *dst, const femlod_collapse_log *src, uint3
     size_t n = src->n, d = dst->n;
     if (n == 0) return 1;
     size_t nvs = src->vstar_start[n] - src->vstar_start[0], nf = src->face_start[n] - src->face_start[0];
+    if (!reserve(dst, n, nvs, nf)) return 0;
     size_t v0 = dst->vstar_start[d], f0 = dst->face_start[d];
-    if (v0 + nvs > UINT32_MAX || f0 + nf > UINT32_MAX) return 0;
-    if (!reserve_collapses(dst, n)) return 0;
-    void *vp = dst->vstars, *fp = dst->faces;
-    size_t fcap3 = 3 * dst->cap_faces;
-    if (!grow(&vp, &dst->cap_vstars, v0 + nvs, sizeof *dst->vstars)) return 0;
-    dst->vstars = vp;
-    if (!grow(&fp, &fcap3, 3 * (f0 + nf), 1)) return 0;
-    dst->faces = fp;
-    dst->cap_faces = fcap3 / 3;
     for (size_t k = 0; k < 2 * n; k++) {
         uint32_t id = src->pair[k];
         dst->pair[2 * d + k] = id >= from ? id + shift : id;
