@@ -1152,11 +1152,29 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                         if (qb[0] > hi[0] || qb[1] > hi[1] || qb[2] > hi[2] || qb[3] < lo[0] ||
                             qb[4] < lo[1] || qb[5] < lo[2])
                             continue;
-                        for (size_t r = 0; r < R->n; r++) {
+                        /* the new triangles whose box meets it: a mask
+                         * without branches (the boxes are too alike for
+                         * the branch predictor), a fan of more than 64 in
+                         * one piece */
+                        uint64_t hit = 0;
+                        size_t rn = R->n <= 64 ? R->n : 0;
+                        for (size_t r = 0; r < rn; r++) {
                             const double *bx = S->sc.tbox + 6 * r;
-                            if (qb[0] > bx[3] || qb[1] > bx[4] || qb[2] > bx[5] || qb[3] < bx[0] ||
-                                qb[4] < bx[1] || qb[5] < bx[2])
-                                continue;
+                            unsigned miss = (unsigned)(qb[0] > bx[3]) | (unsigned)(qb[1] > bx[4]) |
+                                            (unsigned)(qb[2] > bx[5]) | (unsigned)(qb[3] < bx[0]) |
+                                            (unsigned)(qb[4] < bx[1]) | (unsigned)(qb[5] < bx[2]);
+                            hit |= (uint64_t)(miss ^ 1u) << r;
+                        }
+                        if (rn && !hit) continue;
+                        for (size_t r = 0; r < R->n; r++) {
+                            if (rn) {
+                                if (!((hit >> r) & 1u)) continue;
+                            } else {
+                                const double *bx = S->sc.tbox + 6 * r;
+                                if (qb[0] > bx[3] || qb[1] > bx[4] || qb[2] > bx[5] || qb[3] < bx[0] ||
+                                    qb[4] < bx[1] || qb[5] < bx[2])
+                                    continue;
+                            }
                             /* both in the certified star of a shared corner */
                             uint32_t ar = R->a[r], br = R->b[r];
                             if ((S->sc.cert[2 * r] && (t[0] == ar || t[1] == ar || t[2] == ar)) ||
