@@ -1152,29 +1152,22 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                         if (qb[0] > hi[0] || qb[1] > hi[1] || qb[2] > hi[2] || qb[3] < lo[0] ||
                             qb[4] < lo[1] || qb[5] < lo[2])
                             continue;
-                        /* the new triangles whose box meets it: a mask
-                         * without branches (the boxes are too alike for
-                         * the branch predictor), a fan of more than 64 in
-                         * one piece */
-                        uint64_t hit = 0;
-                        size_t rn = R->n <= 64 ? R->n : 0;
-                        for (size_t r = 0; r < rn; r++) {
-                            const double *bx = S->sc.tbox + 6 * r;
-                            unsigned miss = (unsigned)(qb[0] > bx[3]) | (unsigned)(qb[1] > bx[4]) |
-                                            (unsigned)(qb[2] > bx[5]) | (unsigned)(qb[3] < bx[0]) |
-                                            (unsigned)(qb[4] < bx[1]) | (unsigned)(qb[5] < bx[2]);
-                            hit |= (uint64_t)(miss ^ 1u) << r;
-                        }
-                        if (rn && !hit) continue;
-                        for (size_t r = 0; r < R->n; r++) {
-                            if (rn) {
-                                if (!((hit >> r) & 1u)) continue;
-                            } else {
+                        /* the new triangles whose box meets it, as a
+                         * mask per 64 of them, computed without branches
+                         * (the boxes of one fan are too alike for the
+                         * branch predictor); then those in ascending order */
+                        for (size_t r0 = 0; r0 < R->n; r0 += 64) {
+                            size_t r1 = R->n - r0 < 64 ? R->n : r0 + 64;
+                            uint64_t hit = 0;
+                            for (size_t r = r0; r < r1; r++) {
                                 const double *bx = S->sc.tbox + 6 * r;
-                                if (qb[0] > bx[3] || qb[1] > bx[4] || qb[2] > bx[5] || qb[3] < bx[0] ||
-                                    qb[4] < bx[1] || qb[5] < bx[2])
-                                    continue;
+                                unsigned miss = (unsigned)(qb[0] > bx[3]) | (unsigned)(qb[1] > bx[4]) |
+                                                (unsigned)(qb[2] > bx[5]) | (unsigned)(qb[3] < bx[0]) |
+                                                (unsigned)(qb[4] < bx[1]) | (unsigned)(qb[5] < bx[2]);
+                                hit |= (uint64_t)(miss ^ 1u) << (r - r0);
                             }
+                            for (; hit; hit &= hit - 1) {
+                                size_t r = r0 + (size_t)__builtin_ctzll(hit);
                             /* both in the certified star of a shared corner */
                             uint32_t ar = R->a[r], br = R->b[r];
                             if ((S->sc.cert[2 * r] && (t[0] == ar || t[1] == ar || t[2] == ar)) ||
@@ -1185,6 +1178,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                             STAT(tritri);
                             if (fl_tri_tri_intersect_p(T, tid, S->sc.tplane + r, Q, t, S->eps))
                                 return FEMLOD_REJECT_INTERSECTION;
+                            }
                         }
                     }
                     blk = B->next;
