@@ -1168,16 +1168,16 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                             }
                             for (; hit; hit &= hit - 1) {
                                 size_t r = r0 + (size_t)__builtin_ctzll(hit);
-                            /* both in the certified star of a shared corner */
-                            uint32_t ar = R->a[r], br = R->b[r];
-                            if ((S->sc.cert[2 * r] && (t[0] == ar || t[1] == ar || t[2] == ar)) ||
-                                (S->sc.cert[2 * r + 1] && (t[0] == br || t[1] == br || t[2] == br)))
-                                continue;
-                            const double *T[3] = {p, P(S, R->a[r]), P(S, R->b[r])};
-                            uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
-                            STAT(tritri);
-                            if (fl_tri_tri_intersect_p(T, tid, S->sc.tplane + r, Q, t, S->eps))
-                                return FEMLOD_REJECT_INTERSECTION;
+                                /* both in the certified star of a shared corner */
+                                uint32_t ar = R->a[r], br = R->b[r];
+                                if ((S->sc.cert[2 * r] && (t[0] == ar || t[1] == ar || t[2] == ar)) ||
+                                    (S->sc.cert[2 * r + 1] && (t[0] == br || t[1] == br || t[2] == br)))
+                                    continue;
+                                const double *T[3] = {p, P(S, R->a[r]), P(S, R->b[r])};
+                                uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
+                                STAT(tritri);
+                                if (fl_tri_tri_intersect_p(T, tid, S->sc.tplane + r, Q, t, S->eps))
+                                    return FEMLOD_REJECT_INTERSECTION;
                             }
                         }
                     }
