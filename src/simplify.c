@@ -202,6 +202,10 @@ typedef struct simp {
     double tol, maxdev, minst, maxsz, feat_angle, feat_w, max_nc;
     int maxval, keep_boundary, area_w;
     int tol_on, dev_on, st_on, sz_on, val_on, cone_on;
+    /* every interior edge's two faces run opposite ways (set-up); collapses
+     * keep it. Then each edge at an interior manifold vertex v runs from v
+     * in exactly one of v's faces (band_vertex). */
+    int oriented;
     double minst2, maxsz2, cos_nc, cos_nc2, maxdev2, eps;
     /* tri_eval's limits with "off" folded in (a limit nothing crosses), so
      * its tests need no flags: size^2, turn cos^2, stretch^2 (phase 1 only) */
@@ -2035,6 +2039,7 @@ typedef struct edge_ctx {
     simp *S;
     int parts;
     size_t at[16], n[16], off[16];
+    size_t misoriented[16]; /* interior edges whose two faces run the same way */
 } edge_ctx;
 
 static void edge_part(void *arg, size_t a0, size_t a1, int part) {
@@ -2092,6 +2097,10 @@ static void edge_part(void *arg, size_t a0, size_t a1, int part) {
             ev[2 * ne] = (uint32_t)a;
             ev[2 * ne + 1] = rec[x].other;
             enf[ne] = (uint16_t)(y - x > 65535 ? 65535 : y - x);
+            /* the side runs a -> other when a is its first corner */
+            if (y - x == 2 && (S->tri[3 * (size_t)rec[x].face + rec[x].side] == a) ==
+                                  (S->tri[3 * (size_t)rec[x + 1].face + rec[x + 1].side] == a))
+                E->misoriented[part]++;
             for (size_t z = x; z < y; z++) S->tedge[3 * (size_t)rec[z].face + rec[z].side] = (uint32_t)ne;
             ne++;
             x = y;
@@ -2260,6 +2269,9 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     uint16_t *enf2 = fl_realloc(S->enf, ne + 1, sizeof *enf2);
     if (enf2) S->enf = enf2;
     if (E.parts > 1) par_ranges(nth, nt, edge_renumber, &E);
+    S->oriented = 1;
+    for (int t = 0; t < E.parts; t++)
+        if (E.misoriented[t]) S->oriented = 0;
     double elen = 0.0;
     for (size_t e = 0; e < ne; e++) elen += sqrt(dist2(P(S, S->ev[2 * e]), P(S, S->ev[2 * e + 1])));
     S->ne = ne;
@@ -2717,14 +2729,24 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
     double frho = -1.0;
     const uint32_t *fl = S->refs + S->fstart[v];
     uint32_t cnt = S->fcount[v];
+    /* v's edges, each once: at an interior manifold vertex of an oriented
+     * mesh, the side leaving v in each face (no marks: they were a fifth
+     * of the scan's time); elsewhere both sides at v, told apart by marks */
+    int once = S->oriented && !(S->vflag[v] & (V_BOUNDARY | V_NONMANIFOLD));
     for (uint32_t a = 0; a < cnt; a++) {
         uint32_t f = fl[a];
         const uint32_t *t = S->tri + 3 * (size_t)f;
         for (int c = 0; c < 3; c++) {
-            if (t[c] != v && t[(c + 1) % 3] != v) continue;
-            uint32_t ed = S->tedge[3 * (size_t)f + c];
-            if (S->emark[ed] == em) continue;
-            S->emark[ed] = em;
+            uint32_t ed;
+            if (once) {
+                if (t[c] != v) continue;
+                ed = S->tedge[3 * (size_t)f + c];
+            } else {
+                if (t[c] != v && t[(c + 1) % 3] != v) continue;
+                ed = S->tedge[3 * (size_t)f + c];
+                if (S->emark[ed] == em) continue;
+                S->emark[ed] = em;
+            }
             if (S->eflag[ed] & E_DEAD) continue;
             int now = 0;
             double rnow = -1.0;
