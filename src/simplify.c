@@ -1026,6 +1026,45 @@ static inline int ring_has_face(const ring *R, uint32_t f) {
 
 #define K_ID (UINT32_MAX - 1) /* the id of the new vertex in intersection tests */
 
+#define CERT_UNKNOWN 2 /* sc.cert: not computed yet (0: no certificate, 1: certified) */
+
+/* The star certificate of ring vertex x (x = 2r: a_r, 2r + 1: b_r) after
+ * the collapse to p: its faces with i or j moved to p, the removed faces
+ * left out. Computed on first use and stored for every entry of the same
+ * vertex (a function of the vertex alone). */
+static int link_cert_compute(simp *S, const ring *R, const double p[3], size_t x) {
+    uint8_t *cert = S->sc.cert;
+    uint32_t v = x & 1 ? R->b[x >> 1] : R->a[x >> 1];
+    uint8_t ok = 0;
+    const uint32_t *fl = S->refs + S->fstart[v];
+    uint32_t cnt = S->fcount[v];
+    if (!(S->vflag[v] & (V_BOUNDARY | V_NONMANIFOLD)) && cnt <= 64) {
+        const double *U[64], *W[64];
+        size_t nf = 0;
+        for (uint32_t m = 0; m < cnt; m++) {
+            uint32_t f = fl[m];
+            if ((R->ns > 0 && f == R->sface[0]) || (R->ns > 1 && f == R->sface[1])) continue;
+            const uint32_t *t = S->tri + 3 * (size_t)f;
+            int c = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
+            uint32_t y = t[(c + 1) % 3], z = t[(c + 2) % 3];
+            U[nf] = y == R->i || y == R->j ? p : P(S, y);
+            W[nf] = z == R->i || z == R->j ? p : P(S, z);
+            nf++;
+        }
+        ok = (uint8_t)star_embedded(P(S, v), U, W, nf);
+    }
+    for (size_t r = 0; r < R->n; r++) {
+        if (R->a[r] == v) cert[2 * r] = ok;
+        if (R->b[r] == v) cert[2 * r + 1] = ok;
+    }
+    return ok;
+}
+
+static inline int link_cert(simp *S, const ring *R, const double p[3], size_t x) {
+    uint8_t c = S->sc.cert[x];
+    return c != CERT_UNKNOWN ? c : link_cert_compute(S, R, p, x);
+}
+
 /* The slab (band_par) of a grid cell coordinate and of a point. */
 static inline uint32_t slab_of_cell(const simp *S, int c) { return ((uint32_t)c + S->slab_shift) / S->slab_w; }
 static inline uint32_t slab_of(const simp *S, const double *p) {
@@ -1070,53 +1109,24 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
         fmin = R->sface[s] < fmin ? R->sface[s] : fmin;
         fmax = R->sface[s] > fmax ? R->sface[s] : fmax;
     }
-    /* star certificates of k and of the ring vertices (interior, manifold
-     * ones), per new triangle: cert[2r] for a_r, cert[2r+1] for b_r */
+    /* star certificates: k's now; a ring vertex's (interior, manifold)
+     * only when a triangle at it meets a new triangle's box (link_cert),
+     * about once per collapse instead of once per ring vertex */
     int kcert = 0;
     if (!buf_reserve((void **)&S->sc.cert, &S->sc.cert_cap, 2 * R->n + 2, 1)) {
         S->oom = 1;
         return FEMLOD_REJECT_INTERSECTION;
     }
-    memset(S->sc.cert, 0, 2 * R->n);
-    if (FEMLOD_SIMPLIFY_CERTIFY && !((S->vflag[R->i] | S->vflag[R->j]) & (V_BOUNDARY | V_NONMANIFOLD)) &&
-        R->n <= 64) {
+    int certify = FEMLOD_SIMPLIFY_CERTIFY && !((S->vflag[R->i] | S->vflag[R->j]) & (V_BOUNDARY | V_NONMANIFOLD)) &&
+                  R->n <= 64;
+    memset(S->sc.cert, certify ? CERT_UNKNOWN : 0, 2 * R->n);
+    if (certify) {
         const double *U[64] = {NULL}, *W[64] = {NULL};
         for (size_t r = 0; r < R->n; r++) {
             U[r] = P(S, R->a[r]);
             W[r] = P(S, R->b[r]);
         }
         kcert = star_embedded(p, U, W, R->n);
-        for (size_t r = 0; r < R->n; r++)
-            for (int e = 0; e < 2; e++) {
-                uint32_t v = e ? R->b[r] : R->a[r];
-                if (S->vflag[v] & (V_BOUNDARY | V_NONMANIFOLD)) continue;
-                /* the same vertex in an earlier triangle: its answer */
-                int known = -1;
-                for (size_t q = 0; q < r && known < 0; q++) {
-                    if (R->a[q] == v) known = S->sc.cert[2 * q];
-                    else if (R->b[q] == v) known = S->sc.cert[2 * q + 1];
-                }
-                if (known < 0 && e == 1 && R->a[r] == v) known = S->sc.cert[2 * r];
-                if (known >= 0) {
-                    S->sc.cert[2 * r + (size_t)e] = (uint8_t)known;
-                    continue;
-                }
-                const uint32_t *fl = S->refs + S->fstart[v];
-                uint32_t cnt = S->fcount[v];
-                if (cnt > 64) continue;
-                size_t nf = 0;
-                for (uint32_t m = 0; m < cnt; m++) {
-                    uint32_t f = fl[m];
-                    if ((R->ns > 0 && f == R->sface[0]) || (R->ns > 1 && f == R->sface[1])) continue;
-                    const uint32_t *t = S->tri + 3 * (size_t)f;
-                    int c = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
-                    uint32_t x = t[(c + 1) % 3], y = t[(c + 2) % 3];
-                    U[nf] = x == R->i || x == R->j ? p : P(S, x);
-                    W[nf] = y == R->i || y == R->j ? p : P(S, y);
-                    nf++;
-                }
-                S->sc.cert[2 * r + (size_t)e] = (uint8_t)star_embedded(P(S, v), U, W, nf);
-            }
     }
     /* one pass over the cells under the fan; each triangle met once */
     int c0[3], c1[3];
@@ -1174,8 +1184,8 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                                 size_t r = r0 + (size_t)__builtin_ctzll(hit);
                                 /* both in the certified star of a shared corner */
                                 uint32_t ar = R->a[r], br = R->b[r];
-                                if ((S->sc.cert[2 * r] && (t[0] == ar || t[1] == ar || t[2] == ar)) ||
-                                    (S->sc.cert[2 * r + 1] && (t[0] == br || t[1] == br || t[2] == br)))
+                                if (((t[0] == ar || t[1] == ar || t[2] == ar) && link_cert(S, R, p, 2 * r)) ||
+                                    ((t[0] == br || t[1] == br || t[2] == br) && link_cert(S, R, p, 2 * r + 1)))
                                     continue;
                                 const double *T[3] = {p, P(S, R->a[r]), P(S, R->b[r])};
                                 uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
