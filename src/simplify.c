@@ -196,6 +196,12 @@ typedef struct scratch {
     size_t newcone_cap;
 } scratch;
 
+typedef struct face_rec {
+    uint32_t v[3];
+    float n[3];
+    double inv;
+} face_rec;
+
 typedef struct simp {
     /* resolved thresholds */
     size_t target;
@@ -228,11 +234,13 @@ typedef struct simp {
 
     /* faces */
     size_t nt, live, nt_in;
-    uint32_t *tri, *tedge;
+    /* per face slot its corners (v[0] = UINT32_MAX: dead), unit normal
+     * (NaN for degenerate) and 1 / fsz (for Sz_DIF): one 32-byte record,
+     * so that the corners' read brings the rest (64-byte aligned) */
+    face_rec *face;
+    uint32_t *tedge;
     uint32_t *fin; /* input triangle index of each face slot */
-    float *fn;   /* unit normal (NaN for degenerate) */
     float *fsz;  /* longest edge */
-    double *finv; /* 1 / fsz, for Sz_DIF */
     float *cone; /* axis xyz, half-angle (radians) */
     uint32_t *fmark; /* set-up only: the pinched-vertex flood (with vertex stamps) */
     uint32_t *fpt; /* deviation: first removed input vertex assigned to the face */
@@ -327,7 +335,7 @@ static double tri_stretch(const double *a, const double *b, const double *c, dou
 static inline const double *P(const simp *S, uint32_t v) { return S->pos + 3 * (size_t)v; }
 
 static void face_bbox(const simp *S, uint32_t f, double lo[3], double hi[3]) {
-    const uint32_t *t = S->tri + 3 * (size_t)f;
+    const uint32_t *t = S->face[f].v;
     const double *a = P(S, t[0]), *b = P(S, t[1]), *c = P(S, t[2]);
     for (int k = 0; k < 3; k++) {
         lo[k] = mn(a[k], mn(b[k], c[k]));
@@ -336,7 +344,7 @@ static void face_bbox(const simp *S, uint32_t f, double lo[3], double hi[3]) {
 }
 
 static void face_update_cache(simp *S, uint32_t f) {
-    const uint32_t *t = S->tri + 3 * (size_t)f;
+    const uint32_t *t = S->face[f].v;
     const double *a = P(S, t[0]), *b = P(S, t[1]), *c = P(S, t[2]);
     double e1[3], e2[3], n[3];
     sub3(e1, b, a);
@@ -345,13 +353,13 @@ static void face_update_cache(simp *S, uint32_t f) {
     double l = sqrt(dot3(n, n));
     /* a degenerate face gets a NaN normal: every comparison with it is
      * false, so tri_eval skips the turn test without a branch of its own */
-    for (int k = 0; k < 3; k++) S->fn[3 * (size_t)f + k] = l > 0 ? (float)(n[k] / l) : __builtin_nanf("");
+    for (int k = 0; k < 3; k++) S->face[f].n[k] = l > 0 ? (float)(n[k] / l) : __builtin_nanf("");
     double L2 = mx(dot3(e1, e1), mx(dot3(e2, e2), dist2(b, c)));
     S->fsz[f] = (float)sqrt(L2);
-    S->finv[f] = 1.0 / (double)S->fsz[f];
+    S->face[f].inv = 1.0 / (double)S->fsz[f];
 }
 
-static inline int face_alive(const simp *S, uint32_t f) { return S->tri[3 * (size_t)f] != UINT32_MAX; }
+static inline int face_alive(const simp *S, uint32_t f) { return S->face[f].v[0] != UINT32_MAX; }
 
 /* }====== */
 
@@ -414,6 +422,15 @@ static int buf_reserve(void **p, size_t *cap, size_t n, size_t elem) {
     *p = q;
     *cap = c;
     return 1;
+}
+
+/* n elements of size bytes, 64-byte aligned (cache lines); NULL on
+ * ENOMEM or overflow. Freed with free. */
+static void *alloc_lines(size_t n, size_t size) {
+    if (size && n > SIZE_MAX / size) return NULL;
+    void *p = NULL;
+    size_t bytes = n * size;
+    return posix_memalign(&p, 64, bytes ? bytes : 64) == 0 ? p : NULL;
 }
 
 static uint32_t next_stamp(simp *S) {
@@ -488,8 +505,7 @@ static int gather(simp *S, ring *R, uint32_t e) {
     size_t szn = 0;
     size_t n = 0, ns = 0;
     /* locals: the stores into R below could otherwise alias them */
-    const uint32_t *const tri = S->tri;
-    const double *const finv = S->finv;
+    const face_rec *const face = S->face;
     uint32_t *const rface = R->face, *const ra = R->a, *const rb = R->b;
     uint8_t *const rfrom = R->from_j;
     for (int side = 0; side < 2; side++) {
@@ -499,8 +515,8 @@ static int gather(simp *S, ring *R, uint32_t e) {
         if (FEMLOD_SIMPLIFY_SZDIF_RING) szn += cnt;
         for (uint32_t m = 0; m < cnt; m++) {
             uint32_t f = fl[m];
-            const uint32_t *t = tri + 3 * (size_t)f;
-            uint32_t t0 = t[0], t1 = t[1], t2 = t[2], a, b;
+            const face_rec *F = face + f;
+            uint32_t t0 = F->v[0], t1 = F->v[1], t2 = F->v[2], a, b;
             if (t0 == v) {
                 a = t1;
                 b = t2;
@@ -511,7 +527,7 @@ static int gather(simp *S, ring *R, uint32_t e) {
                 a = t0;
                 b = t1;
             }
-            if (FEMLOD_SIMPLIFY_SZDIF_RING) szsum += finv[f];
+            if (FEMLOD_SIMPLIFY_SZDIF_RING) szsum += F->inv;
             if (a == o || b == o) {
                 if (side == 0) {
                     if (ns == 2) return FEMLOD_REJECT_TOPOLOGY;
@@ -519,7 +535,7 @@ static int gather(simp *S, ring *R, uint32_t e) {
                     R->sopp[ns] = a == o ? b : a;
                     ns++;
                     if (!FEMLOD_SIMPLIFY_SZDIF_RING) {
-                        szsum += S->finv[f];
+                        szsum += F->inv;
                         szn++;
                     }
                 }
@@ -545,7 +561,7 @@ static int gather(simp *S, ring *R, uint32_t e) {
             uint32_t v = side ? j : i, o = side ? i : j;
             const uint32_t *fl = S->refs + S->fstart[v];
             for (uint32_t m = 0; m < S->fcount[v]; m++) {
-                const uint32_t *t = S->tri + 3 * (size_t)fl[m];
+                const uint32_t *t = S->face[fl[m]].v;
                 if (side == 1 && (t[0] == o || t[1] == o || t[2] == o)) continue;
                 double st = tri_stretch(P(S, t[0]), P(S, t[1]), P(S, t[2]), NULL);
                 if (st < stmin) stmin = st;
@@ -634,7 +650,7 @@ static inline int tri_eval(const simp *S, const ring *R, size_t r, const double 
     double n2 = dot3(n, n);
     if (!(n2 > 0.0)) return FEMLOD_REJECT_STRETCH;
     /* foldover: the normal may not flip nor turn past max_normal_change */
-    const float *fo = S->fn + 3 * (size_t)R->face[r];
+    const float *fo = S->face[R->face[r]].n;
     double d = n[0] * fo[0] + n[1] * fo[1] + n[2] * fo[2]; /* NaN: the old face was degenerate, no test */
     if (d <= 0.0) return FEMLOD_REJECT_FOLDOVER;
     if (d * d < S->lim_turn2 * n2) return FEMLOD_REJECT_FOLDOVER;
@@ -922,7 +938,7 @@ static int deviation_check(simp *S, ring *R, const double p[3], size_t *np) {
         for (uint32_t m = 0; m < S->fcount[v]; m++) {
             uint32_t f = fl[m];
             if (side == 1) { /* shared faces were listed from i */
-                const uint32_t *t = S->tri + 3 * (size_t)f;
+                const uint32_t *t = S->face[f].v;
                 if (t[0] == R->i || t[1] == R->i || t[2] == R->i) continue;
             }
             for (uint32_t x = S->fpt[f]; x != UINT32_MAX; x = S->pnext[x]) {
@@ -1044,7 +1060,7 @@ static int link_cert_compute(simp *S, const ring *R, const double p[3], size_t x
         for (uint32_t m = 0; m < cnt; m++) {
             uint32_t f = fl[m];
             if ((R->ns > 0 && f == R->sface[0]) || (R->ns > 1 && f == R->sface[1])) continue;
-            const uint32_t *t = S->tri + 3 * (size_t)f;
+            const uint32_t *t = S->face[f].v;
             int c = t[0] == v ? 0 : (t[1] == v ? 1 : 2);
             uint32_t y = t[(c + 1) % 3], z = t[(c + 2) % 3];
             U[nf] = y == R->i || y == R->j ? p : P(S, y);
@@ -1156,7 +1172,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                         if ((B->first[s] & need) != need) continue; /* met in an earlier cell */
                         uint32_t f = B->item[s];
                         if (f >= fmin && f <= fmax && ring_has_face(R, f)) continue; /* being replaced */
-                        const uint32_t *t = S->tri + 3 * (size_t)f;
+                        const uint32_t *t = S->face[f].v;
                         const double *Q[3] = {P(S, t[0]), P(S, t[1]), P(S, t[2])};
                         double qb[6];
                         for (int k = 0; k < 3; k++) {
@@ -1292,11 +1308,11 @@ static int log_collapse(simp *S, ring *R, const double p[3]) {
     if (nf > sizeof S->lfaces / 3) return 0;
     size_t w = 0;
     for (size_t s = 0; s < R->ns; s++) {
-        const uint32_t *t = S->tri + 3 * (size_t)R->sface[s];
+        const uint32_t *t = S->face[R->sface[s]].v;
         for (int c = 0; c < 3; c++) S->lfaces[w++] = local_ref(S, R, nvs, t[c]);
     }
     for (size_t r = 0; r < R->n; r++) {
-        const uint32_t *t = S->tri + 3 * (size_t)R->face[r];
+        const uint32_t *t = S->face[R->face[r]].v;
         for (int c = 0; c < 3; c++) S->lfaces[w++] = local_ref(S, R, nvs, t[c]);
     }
     return fl_log_add(S->log, S->node[R->i], S->node[R->j], p, es, S->vstars, nvs, S->lfaces, nf);
@@ -1315,7 +1331,7 @@ static void grid_remove_face(simp *S, uint32_t f) {
 }
 
 static uint32_t side_edge(const simp *S, uint32_t f, uint32_t u, uint32_t v) {
-    const uint32_t *t = S->tri + 3 * (size_t)f;
+    const uint32_t *t = S->face[f].v;
     for (int c = 0; c < 3; c++) {
         uint32_t x = t[c], y = t[(c + 1) % 3];
         if ((x == u && y == v) || (x == v && y == u)) return S->tedge[3 * (size_t)f + c];
@@ -1418,7 +1434,7 @@ static int collapse(simp *S, ring *R, int c) {
         fl_heap_remove(&S->heap, ejx);
         list_remove(S, x, F);
         S->val[x]--;
-        uint32_t *t = S->tri + 3 * (size_t)F;
+        uint32_t *t = S->face[F].v;
         t[0] = t[1] = t[2] = UINT32_MAX;
         S->live--;
     }
@@ -1426,7 +1442,7 @@ static int collapse(simp *S, ring *R, int c) {
     for (size_t r = 0; r < R->n; r++) {
         if (!R->from_j[r]) continue;
         uint32_t f = R->face[r];
-        uint32_t *t = S->tri + 3 * (size_t)f;
+        uint32_t *t = S->face[f].v;
         for (int k = 0; k < 3; k++) {
             if (t[k] == j) t[k] = i;
             uint32_t ed = S->tedge[3 * (size_t)f + k];
@@ -1480,7 +1496,7 @@ static int collapse(simp *S, ring *R, int c) {
 /* {====== (re-)evaluation */
 
 static int face_is_bad(const simp *S, uint32_t f) {
-    const uint32_t *t = S->tri + 3 * (size_t)f;
+    const uint32_t *t = S->face[f].v;
     return tri_stretch(P(S, t[0]), P(S, t[1]), P(S, t[2]), NULL) < S->minst;
 }
 
@@ -1541,7 +1557,7 @@ static int reevaluate_ring(simp *S, uint32_t k) {
             verts[0] = k;
             nvv = 1;
         } else {
-            const uint32_t *t = S->tri + 3 * (size_t)fk[m];
+            const uint32_t *t = S->face[fk[m]].v;
             nvv = 0;
             for (int c = 0; c < 3; c++)
                 if (t[c] != k && S->vmark[t[c]] != vm) {
@@ -1554,7 +1570,7 @@ static int reevaluate_ring(simp *S, uint32_t k) {
             const uint32_t *fl = S->refs + S->fstart[v];
             for (uint32_t a = 0; a < S->fcount[v]; a++) {
                 uint32_t f = fl[a];
-                const uint32_t *t = S->tri + 3 * (size_t)f;
+                const uint32_t *t = S->face[f].v;
                 int bad = S->phase == 0 && face_is_bad(S, f);
                 for (int c = 0; c < 3; c++) {
                     if (t[c] != v && t[(c + 1) % 3] != v) continue;
@@ -1776,12 +1792,10 @@ static void simp_free(simp *S) {
     free(S->vbest);
     free(S->ekey);
     free(S->refs);
-    free(S->tri);
+    free(S->face);
     free(S->fin);
     free(S->tedge);
-    free(S->fn);
     free(S->fsz);
-    free(S->finv);
     free(S->cone);
     free(S->fmark);
     free(S->fpt);
@@ -2020,7 +2034,7 @@ static void plane_quadrics(void *arg, size_t v0, size_t v1, int part) {
         const uint32_t *fl = S->refs + S->fstart[v];
         double area = 0.0;
         for (uint32_t m = 0; m < S->fcount[v]; m++) {
-            const uint32_t *t = S->tri + 3 * (size_t)fl[m];
+            const uint32_t *t = S->face[fl[m]].v;
             /* the float cache is for checks; the quadric gets the exact normal */
             double e1[3], e2[3], nn[3], n[3];
             sub3(e1, P(S, t[1]), P(S, t[0]));
@@ -2078,7 +2092,7 @@ static void edge_part(void *arg, size_t a0, size_t a1, int part) {
         }
         for (uint32_t m = 0; m < cnt; m++) {
             uint32_t f = fl[m];
-            const uint32_t *t = S->tri + 3 * (size_t)f;
+            const uint32_t *t = S->face[f].v;
             int c = t[0] == a ? 0 : (t[1] == a ? 1 : 2);
             int sides[2] = {c, (c + 2) % 3};
             uint32_t others[2] = {t[(c + 1) % 3], t[(c + 2) % 3]};
@@ -2108,8 +2122,8 @@ static void edge_part(void *arg, size_t a0, size_t a1, int part) {
             ev[2 * ne + 1] = rec[x].other;
             enf[ne] = (uint16_t)(y - x > 65535 ? 65535 : y - x);
             /* the side runs a -> other when a is its first corner */
-            if (y - x == 2 && (S->tri[3 * (size_t)rec[x].face + rec[x].side] == a) ==
-                                  (S->tri[3 * (size_t)rec[x + 1].face + rec[x + 1].side] == a))
+            if (y - x == 2 && (S->face[rec[x].face].v[rec[x].side] == a) ==
+                                  (S->face[rec[x + 1].face].v[rec[x + 1].side] == a))
                 E->misoriented[part]++;
             for (size_t z = x; z < y; z++) S->tedge[3 * (size_t)rec[z].face + rec[z].side] = (uint32_t)ne;
             ne++;
@@ -2129,7 +2143,7 @@ static void edge_renumber(void *arg, size_t f0, size_t f1, int part) {
     size_t nv = S->nv;
     (void)part;
     for (size_t f = f0; f < f1; f++) {
-        const uint32_t *t = S->tri + 3 * f;
+        const uint32_t *t = S->face[f].v;
         for (int c = 0; c < 3; c++) {
             uint32_t a = t[c] < t[(c + 1) % 3] ? t[c] : t[(c + 1) % 3];
             int p = 0;
@@ -2167,8 +2181,8 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
 #define CALLOC(p, n) (((p) = fl_calloc((n), sizeof *(p))) != NULL)
     if (!ALLOC(S->pos, 3 * nv) || !CALLOC(S->q, nv) || !ALLOC(S->node, nv) || !ALLOC(S->fstart, nv + 1) ||
         !CALLOC(S->fcount, nv) || !CALLOC(S->val, nv) || !CALLOC(S->vflag, nv) || !CALLOC(S->fdeg, nv) ||
-        !CALLOC(S->vmark, nv) || !ALLOC(S->tri, 3 * nt) || !ALLOC(S->tedge, 3 * nt) ||
-        !ALLOC(S->fn, 3 * nt) || !ALLOC(S->fsz, nt) || !ALLOC(S->finv, nt) || !CALLOC(S->fmark, nt))
+        !CALLOC(S->vmark, nv) || !(S->face = alloc_lines(nt, sizeof *S->face)) || !ALLOC(S->tedge, 3 * nt) ||
+        !ALLOC(S->fsz, nt) || !CALLOC(S->fmark, nt))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory (%zu triangles)", nt_in);
     /* Vertex slots in Morton order of position: the neighbours of a vertex
      * then sit near it in memory, which halves the time on large meshes
@@ -2189,7 +2203,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
         const uint32_t *t = tin + 3 * f;
         if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
         for (int c = 0; c < 3; c++) {
-            S->tri[3 * nt + c] = slot_of[t[c]];
+            S->face[nt].v[c] = slot_of[t[c]];
             S->fcount[slot_of[t[c]]]++;
         }
         nt++;
@@ -2214,17 +2228,17 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
             if (t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) fin0[w++] = (uint32_t)f;
         }
         for (size_t f = 0; f < nt; f++) {
-            const uint32_t *t = S->tri + 3 * f;
+            const uint32_t *t = S->face[f].v;
             cnt[min3u(t) + 1]++;
         }
         for (size_t v = 0; v < nv; v++) cnt[v + 1] += cnt[v];
         for (size_t f = 0; f < nt; f++) {
-            const uint32_t *t = S->tri + 3 * f;
+            const uint32_t *t = S->face[f].v;
             uint32_t d = cnt[min3u(t)]++;
             memcpy(tmp + 3 * (size_t)d, t, 3 * sizeof *t);
             S->fin[d] = fin0[f];
         }
-        memcpy(S->tri, tmp, 3 * nt * sizeof *tmp);
+        for (size_t f = 0; f < nt; f++) memcpy(S->face[f].v, tmp + 3 * f, 3 * sizeof *tmp);
         free(cnt);
         free(tmp);
         free(fin0);
@@ -2242,7 +2256,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     memset(S->fcount, 0, nv * sizeof *S->fcount);
     for (size_t f = 0; f < nt; f++)
         for (int c = 0; c < 3; c++) {
-            uint32_t v = S->tri[3 * f + c];
+            uint32_t v = S->face[f].v[c];
             S->refs[S->fstart[v] + S->fcount[v]++] = (uint32_t)f;
         }
     SETUP_T(2);
@@ -2368,7 +2382,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
                 if (te[0] == e || te[1] == e || te[2] == e) f2[n2++] = fl[m];
             }
             if (n2 == 2) {
-                const float *x = S->fn + 3 * (size_t)f2[0], *y = S->fn + 3 * (size_t)f2[1];
+                const float *x = S->face[f2[0]].n, *y = S->face[f2[1]].n;
                 /* a degenerate face (NaN normal) counts as normal 0: c = 0 */
                 double c = isnan(x[0]) || isnan(y[0]) ? 0.0 : (double)x[0] * y[0] + (double)x[1] * y[1] + (double)x[2] * y[2];
                 if (c < cos_feat) sharp = 0.5 * (1.0 - c);
@@ -2415,7 +2429,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     if (S->cone_on) {
         if (!ALLOC(S->cone, 4 * nt)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
         for (size_t f = 0; f < nt; f++) {
-            memcpy(S->cone + 4 * f, S->fn + 3 * f, 3 * sizeof(float));
+            memcpy(S->cone + 4 * f, S->face[f].n, 3 * sizeof(float));
             if (isnan(S->cone[4 * f])) S->cone[4 * f] = S->cone[4 * f + 1] = S->cone[4 * f + 2] = 0.0f;
             S->cone[4 * f + 3] = 0.0f;
         }
@@ -2679,7 +2693,7 @@ static int u32vec_push(u32vec *a, uint32_t x) {
 static int par_star_readable(const simp *S, uint32_t v) {
     const uint32_t *fl = S->refs + S->fstart[v];
     for (uint32_t m = 0; m < S->fcount[v]; m++) {
-        const uint32_t *t = S->tri + 3 * (size_t)fl[m];
+        const uint32_t *t = S->face[fl[m]].v;
         for (int c = 0; c < 3; c++) {
             if (t[c] == v) continue;
             uint32_t sl = slab_of(S, P(S, t[c]));
@@ -2745,7 +2759,7 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
     int once = S->oriented && !(S->vflag[v] & (V_BOUNDARY | V_NONMANIFOLD));
     for (uint32_t a = 0; a < cnt; a++) {
         uint32_t f = fl[a];
-        const uint32_t *t = S->tri + 3 * (size_t)f;
+        const uint32_t *t = S->face[f].v;
         for (int c = 0; c < 3; c++) {
             uint32_t ed;
             if (once) {
@@ -2825,7 +2839,7 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
         if (rho >= tau) S->ekey[best] = -1.0f;
         float rest = -1.0f;
         for (uint32_t a = 0; a < cnt; a++) {
-            const uint32_t *t = S->tri + 3 * (size_t)fl[a];
+            const uint32_t *t = S->face[fl[a]].v;
             for (int c = 0; c < 3; c++) {
                 if (t[c] != v && t[(c + 1) % 3] != v) continue;
                 uint32_t ed = S->tedge[3 * (size_t)fl[a] + c];
@@ -2847,7 +2861,7 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
     const uint32_t *fk = S->refs + S->fstart[k];
     for (uint32_t m = 0; m < S->fcount[k]; m++) {
         uint32_t f = fk[m];
-        const uint32_t *t = S->tri + 3 * (size_t)f;
+        const uint32_t *t = S->face[f].v;
         for (int c = 0; c < 3; c++) {
             S->vlock[t[c]] = S->pass;
             S->vbest[t[c]] = FLT_MAX;
@@ -3557,7 +3571,7 @@ static femlod_status make_output(simp *S, femlod_mesh **out, femlod_collapse_log
     for (size_t x = 0; x < S->nt_in; x++) {
         uint32_t f = byin[x];
         if (f == UINT32_MAX) continue;
-        for (int c = 0; c < 3; c++) m->tri[3 * w + c] = map[S->tri[3 * (size_t)f + c]];
+        for (int c = 0; c < 3; c++) m->tri[3 * w + c] = map[S->face[f].v[c]];
         w++;
     }
     free(byin);
