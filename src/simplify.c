@@ -196,6 +196,13 @@ typedef struct scratch {
     size_t newcone_cap;
 } scratch;
 
+typedef struct edge_rec {
+    uint32_t v[2]; /* endpoints, v[0] < v[1] at first */
+    float key;
+    uint16_t nf;
+    uint8_t flag, state;
+} edge_rec;
+
 typedef struct face_rec {
     uint32_t v[3];
     float n[3];
@@ -250,7 +257,10 @@ typedef struct simp {
     size_t ne;
     uint32_t *ev;
     uint16_t *enf;
-    uint8_t *eflag, *estate;
+    /* per edge: its endpoints, key in the fast passes, face count, flags
+     * (E_FEATURE, E_DEAD) and state (the rest): one 16-byte record, read
+     * together (ev and enf only during the set-up) */
+    edge_rec *edge;
     uint32_t *emark;
     double *eopt;    /* per edge: the optimum candidate (E_OPT) */
     uint32_t *ehint; /* per edge and candidate (make_candidates order, first two): see eval_candidate */
@@ -274,7 +284,7 @@ typedef struct simp {
      * locked it and the best key of its edges, per edge its last key */
     double fast;
     uint32_t *vlock;
-    float *vbest, *ekey;
+    float *vbest;
     uint32_t pass;
     size_t swept;
     /* parallel fast passes (band_par): the thread count; in a worker's view
@@ -450,15 +460,15 @@ static uint32_t next_stamp(simp *S) {
 /* Returns NO_REASON when the edge may be collapsed (position aside) and
  * fills R; otherwise the reason. */
 static int gather(simp *S, ring *R, uint32_t e) {
-    uint32_t i = S->ev[2 * (size_t)e], j = S->ev[2 * (size_t)e + 1];
+    uint32_t i = S->edge[e].v[0], j = S->edge[e].v[1];
     R->e = e;
     R->i = i;
     R->j = j;
     R->n = 0;
     R->ns = 0;
     uint8_t fi = S->vflag[i], fj = S->vflag[j];
-    unsigned nf = S->enf[e];
-    int feature = (S->eflag[e] & E_FEATURE) != 0;
+    unsigned nf = S->edge[e].nf;
+    int feature = (S->edge[e].flag & E_FEATURE) != 0;
 
     /* Which positions may k take (method-notes "Optimal position"): fixed
      * vertices stay, a vertex on one feature line only slides along it,
@@ -586,7 +596,7 @@ static int gather(simp *S, ring *R, uint32_t e) {
         const uint32_t *te = S->tedge + 3 * (size_t)R->sface[s];
         int nfeat = 0;
         for (int c = 0; c < 3; c++)
-            if (te[c] != e && (S->eflag[te[c]] & E_FEATURE)) nfeat++;
+            if (te[c] != e && (S->edge[te[c]].flag & E_FEATURE)) nfeat++;
         if (nfeat == 2) return FEMLOD_REJECT_TOPOLOGY;
     }
 
@@ -710,8 +720,8 @@ static uint32_t line_neighbour(const simp *S, uint32_t v, uint32_t e) {
         const uint32_t *te = S->tedge + 3 * (size_t)fl[m];
         for (int c = 0; c < 3; c++) {
             uint32_t ed = te[c];
-            if (ed == e || !(S->eflag[ed] & E_FEATURE)) continue;
-            uint32_t a = S->ev[2 * (size_t)ed], b = S->ev[2 * (size_t)ed + 1];
+            if (ed == e || !(S->edge[ed].flag & E_FEATURE)) continue;
+            uint32_t a = S->edge[ed].v[0], b = S->edge[ed].v[1];
             if (a == v) return b;
             if (b == v) return a;
         }
@@ -764,7 +774,7 @@ static void make_candidates(simp *S, ring *R) {
     if (FEMLOD_SIMPLIFY_USE_OPTIMUM) {
         /* cached while i and j keep their positions and quadrics (cleared
          * for the edges at k after each collapse, reevaluate_ring) */
-        uint8_t *fl = S->estate + R->e;
+        uint8_t *fl = &S->edge[R->e].state;
         double *opt = S->eopt + 3 * (size_t)R->e;
         if (!(*fl & E_OPT)) {
             STAT(solves);
@@ -1399,7 +1409,7 @@ static int collapse(simp *S, ring *R, int c) {
     const double *pc = R->cand[c];
     double p[3] = {pc[0], pc[1], pc[2]};
     uint32_t i = R->i, j = R->j, e = R->e;
-    int efeat = (S->eflag[e] & E_FEATURE) != 0;
+    int efeat = (S->edge[e].flag & E_FEATURE) != 0;
     if (S->log && !log_collapse(S, R, p)) return 0;
 
     /* out of the grid while the old positions hold */
@@ -1418,7 +1428,7 @@ static int collapse(simp *S, ring *R, int c) {
 
     /* edges: (i,j) goes; (j,x) merges into (i,x) at each removed face */
     fl_heap_remove(&S->heap, e);
-    S->eflag[e] = E_DEAD;
+    S->edge[e].flag = E_DEAD;
     for (size_t s = 0; s < R->ns; s++) {
         uint32_t F = R->sface[s], x = R->sopp[s];
         uint32_t eix = side_edge(S, F, i, x), ejx = side_edge(S, F, j, x);
@@ -1428,9 +1438,9 @@ static int collapse(simp *S, ring *R, int c) {
             for (int k = 0; k < 3; k++)
                 if (te[k] == ejx) te[k] = eix;
         }
-        S->enf[eix] = (uint16_t)(S->enf[eix] + S->enf[ejx] - 2);
-        S->eflag[eix] |= S->eflag[ejx] & E_FEATURE;
-        S->eflag[ejx] = E_DEAD;
+        S->edge[eix].nf = (uint16_t)(S->edge[eix].nf + S->edge[ejx].nf - 2);
+        S->edge[eix].flag |= S->edge[ejx].flag & E_FEATURE;
+        S->edge[ejx].flag = E_DEAD;
         fl_heap_remove(&S->heap, ejx);
         list_remove(S, x, F);
         S->val[x]--;
@@ -1446,8 +1456,8 @@ static int collapse(simp *S, ring *R, int c) {
         for (int k = 0; k < 3; k++) {
             if (t[k] == j) t[k] = i;
             uint32_t ed = S->tedge[3 * (size_t)f + k];
-            if (S->ev[2 * (size_t)ed] == j) S->ev[2 * (size_t)ed] = i;
-            if (S->ev[2 * (size_t)ed + 1] == j) S->ev[2 * (size_t)ed + 1] = i;
+            if (S->edge[ed].v[0] == j) S->edge[ed].v[0] = i;
+            if (S->edge[ed].v[1] == j) S->edge[ed].v[1] = i;
         }
     }
     /* the new vertex's face list, appended */
@@ -1501,13 +1511,13 @@ static int face_is_bad(const simp *S, uint32_t f) {
 }
 
 static void update_edge(simp *S, uint32_t ed, int eligible) {
-    if (S->eflag[ed] & E_DEAD) return;
+    if (S->edge[ed].flag & E_DEAD) return;
     if (!eligible) {
         fl_heap_remove(&S->heap, ed);
         return;
     }
     double rho = evaluate(S, &S->R, ed);
-    S->estate[ed] = (uint8_t)((S->estate[ed] & ~(E_TOLFAIL | E_STALE)) | (S->R.tolfail ? E_TOLFAIL : 0));
+    S->edge[ed].state = (uint8_t)((S->edge[ed].state & ~(E_TOLFAIL | E_STALE)) | (S->R.tolfail ? E_TOLFAIL : 0));
     if (rho >= 0.0) fl_heap_set(&S->heap, ed, rho);
     else fl_heap_remove(&S->heap, ed);
 }
@@ -1516,10 +1526,10 @@ static void update_edge(simp *S, uint32_t ed, int eligible) {
  * from k): the same decisions on validity and E_TOLFAIL. */
 static void bound_update(simp *S, uint32_t ed, uint32_t k) {
     double ub = bound_edge(S, &S->R, ed, k);
-    S->estate[ed] = (uint8_t)((S->estate[ed] & ~(E_TOLFAIL | E_STALE)) | (S->R.tolfail ? E_TOLFAIL : 0));
+    S->edge[ed].state = (uint8_t)((S->edge[ed].state & ~(E_TOLFAIL | E_STALE)) | (S->R.tolfail ? E_TOLFAIL : 0));
     if (ub >= 0.0) {
         fl_heap_set(&S->heap, ed, ub);
-        S->estate[ed] |= E_STALE;
+        S->edge[ed].state |= E_STALE;
     } else {
         fl_heap_remove(&S->heap, ed);
     }
@@ -1532,7 +1542,7 @@ static void bound_update(simp *S, uint32_t ed, uint32_t k) {
 static void settle(simp *S) {
     while (fl_heap_size(&S->heap) && !S->oom) {
         uint32_t t = fl_heap_top(&S->heap);
-        if (!(S->estate[t] & E_STALE)) return;
+        if (!(S->edge[t].state & E_STALE)) return;
         STAT(settles);
         update_edge(S, t, 1);
     }
@@ -1607,11 +1617,11 @@ static int reevaluate_ring(simp *S, uint32_t k) {
     for (size_t x = 0; x < ne; x++) {
         uint32_t ed = S->sc.ebuf[2 * x];
         uint8_t kind = S->phase == 1 || S->sc.ebuf[2 * x + 1] ? RK_EVAL : RK_REMOVE;
-        if (S->ev[2 * (size_t)ed] == k || S->ev[2 * (size_t)ed + 1] == k) S->estate[ed] &= (uint8_t)~E_OPT;
+        if (S->edge[ed].v[0] == k || S->edge[ed].v[1] == k) S->edge[ed].state &= (uint8_t)~E_OPT;
         else if (S->phase == 1) {
             /* An edge away from k keeps its endpoints, hence its candidates
              * and their quadric errors: one that failed C1 alone still does. */
-            if (S->estate[ed] & E_TOLFAIL) {
+            if (S->edge[ed].state & E_TOLFAIL) {
                 STAT(skipped);
                 kind = RK_SKIP;
             } else if (FEMLOD_SIMPLIFY_BOUND) {
@@ -1620,7 +1630,7 @@ static int reevaluate_ring(simp *S, uint32_t k) {
                 kind = RK_BOUND;
             }
         }
-        if (kind == RK_EVAL && (S->eflag[ed] & E_DEAD)) kind = RK_SKIP; /* as update_edge */
+        if (kind == RK_EVAL && (S->edge[ed].flag & E_DEAD)) kind = RK_SKIP; /* as update_edge */
         S->rkind[x] = kind;
         if (kind == RK_EVAL) S->rlist[nev++] = ed;
     }
@@ -1638,7 +1648,7 @@ static int reevaluate_ring(simp *S, uint32_t k) {
             break;
         case RK_EVAL: {
             double rho = S->rrho[nev];
-            S->estate[ed] = (uint8_t)((S->estate[ed] & ~(E_TOLFAIL | E_STALE)) | (S->rtol[nev] ? E_TOLFAIL : 0));
+            S->edge[ed].state = (uint8_t)((S->edge[ed].state & ~(E_TOLFAIL | E_STALE)) | (S->rtol[nev] ? E_TOLFAIL : 0));
             if (rho >= 0.0) fl_heap_set(&S->heap, ed, rho);
             else fl_heap_remove(&S->heap, ed);
             nev++;
@@ -1678,7 +1688,7 @@ static size_t evaluate_all(simp *S, const femlod_simplify_options *o, double don
             size_t x = ed - e0;
             if (!S->rkind[x]) continue;
             double rho = S->rrho[x];
-            S->estate[ed] = (uint8_t)((S->estate[ed] & ~(E_TOLFAIL | E_STALE)) | (S->rtol[x] ? E_TOLFAIL : 0));
+            S->edge[ed].state = (uint8_t)((S->edge[ed].state & ~(E_TOLFAIL | E_STALE)) | (S->rtol[x] ? E_TOLFAIL : 0));
             if (rho >= 0.0) {
                 fl_heap_set(&S->heap, (uint32_t)ed, rho);
                 n++;
@@ -1693,10 +1703,10 @@ static size_t evaluate_all(simp *S, const femlod_simplify_options *o, double don
 /* Whether evaluate_all evaluates edge ed: live, not queued, and in the
  * pre-phase on a triangle below min_stretch. */
 static int eval_wanted(const simp *S, size_t ed) {
-    if (S->eflag[ed] & E_DEAD) return 0;
+    if (S->edge[ed].flag & E_DEAD) return 0;
     if (fl_heap_contains(&S->heap, (uint32_t)ed)) return 0;
     if (S->phase != 0) return 1;
-    uint32_t v = S->ev[2 * ed];
+    uint32_t v = S->edge[ed].v[0];
     const uint32_t *fl = S->refs + S->fstart[v];
     for (uint32_t a = 0; a < S->fcount[v]; a++) {
         const uint32_t *te = S->tedge + 3 * (size_t)fl[a];
@@ -1751,7 +1761,6 @@ static void simp_view(simp *w, const simp *S) {
     w->fast = S->fast;
     w->vlock = S->vlock;
     w->vbest = S->vbest;
-    w->ekey = S->ekey;
     w->pass = S->pass;
     w->nthreads = 1;
     w->par = 0;
@@ -1790,7 +1799,6 @@ static void simp_free(simp *S) {
     free(S->vmark);
     free(S->vlock);
     free(S->vbest);
-    free(S->ekey);
     free(S->refs);
     free(S->face);
     free(S->fin);
@@ -1802,8 +1810,7 @@ static void simp_free(simp *S) {
     free(S->pnext);
     free(S->ev);
     free(S->enf);
-    free(S->eflag);
-    free(S->estate);
+    free(S->edge);
     free(S->emark);
     free(S->ehint);
     free(S->eopt);
@@ -2299,10 +2306,21 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     double elen = 0.0;
     for (size_t e = 0; e < ne; e++) elen += sqrt(dist2(P(S, S->ev[2 * e]), P(S, S->ev[2 * e + 1])));
     S->ne = ne;
-    if (!CALLOC(S->eflag, ne + 1) || !CALLOC(S->estate, ne + 1) || !CALLOC(S->emark, ne + 1) || !ALLOC(S->eopt, 3 * ne + 3) ||
+    if (!(S->edge = alloc_lines(ne + 1, sizeof *S->edge)) || !CALLOC(S->emark, ne + 1) || !ALLOC(S->eopt, 3 * ne + 3) ||
         (FEMLOD_SIMPLIFY_BOUND && !ALLOC(S->ehint, 2 * ne + 2)))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     if (FEMLOD_SIMPLIFY_BOUND) memset(S->ehint, 0xff, (2 * ne + 2) * sizeof *S->ehint);
+    for (size_t e = 0; e <= ne; e++) {
+        S->edge[e].key = -1.0f;
+        S->edge[e].nf = e < ne ? S->enf[e] : 0;
+        S->edge[e].flag = S->edge[e].state = 0;
+        S->edge[e].v[0] = e < ne ? S->ev[2 * e] : 0;
+        S->edge[e].v[1] = e < ne ? S->ev[2 * e + 1] : 0;
+    }
+    free(S->enf);
+    S->enf = NULL;
+    free(S->ev);
+    S->ev = NULL;
 
     SETUP_T(4);
     double lo[3], hi[3];
@@ -2318,11 +2336,11 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     SETUP_T(5);
     /* boundary and non-manifold edges */
     for (size_t e = 0; e < ne; e++) {
-        uint32_t a = S->ev[2 * e], b = S->ev[2 * e + 1];
-        if (S->enf[e] == 1) {
+        uint32_t a = S->edge[e].v[0], b = S->edge[e].v[1];
+        if (S->edge[e].nf == 1) {
             S->vflag[a] |= V_BOUNDARY;
             S->vflag[b] |= V_BOUNDARY;
-        } else if (S->enf[e] > 2) {
+        } else if (S->edge[e].nf > 2) {
             S->vflag[a] |= V_NONMANIFOLD;
             S->vflag[b] |= V_NONMANIFOLD;
         }
@@ -2346,7 +2364,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
                     const uint32_t *tw = S->tedge + 3 * (size_t)fl[w];
                     for (int x = 0; x < 3; x++)
                         for (int y = 0; y < 3; y++)
-                            if (te[x] == tw[y] && (S->ev[2 * (size_t)te[x]] == v || S->ev[2 * (size_t)te[x] + 1] == v)) {
+                            if (te[x] == tw[y] && (S->edge[te[x]].v[0] == v || S->edge[te[x]].v[1] == v)) {
                                 S->fmark[fl[m]] = mk;
                                 x = y = 3;
                             }
@@ -2369,9 +2387,9 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     /* features and line quadrics, weighted by sharpness */
     double cos_feat = S->feat_angle > 0.0 ? cos(S->feat_angle * PI / 180.0) : -2.0;
     for (size_t e = 0; e < ne; e++) {
-        uint32_t a = S->ev[2 * e], b = S->ev[2 * e + 1];
+        uint32_t a = S->edge[e].v[0], b = S->edge[e].v[1];
         double sharp = 0.0;
-        if (S->enf[e] != 2) {
+        if (S->edge[e].nf != 2) {
             sharp = 1.0;
         } else if (S->feat_angle > 0.0) {
             /* the two faces: scan a's list */
@@ -2389,7 +2407,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
             }
         }
         if (sharp > 0.0) {
-            S->eflag[e] |= E_FEATURE;
+            S->edge[e].flag |= E_FEATURE;
             if (S->fdeg[a] < 255) S->fdeg[a]++;
             if (S->fdeg[b] < 255) S->fdeg[b]++;
             if (S->feat_w > 0.0) {
@@ -2771,19 +2789,19 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
                 if (S->emark[ed] == em) continue;
                 S->emark[ed] = em;
             }
-            if (S->eflag[ed] & E_DEAD) continue;
+            if (S->edge[ed].flag & E_DEAD) continue;
             int now = 0;
             double rnow = -1.0;
-            if (S->estate[ed] & E_STALE) {
+            if (S->edge[ed].state & E_STALE) {
                 rnow = evaluate(S, R, ed);
                 if (S->oom) return -1;
-                S->ekey[ed] = rnow < 0.0 ? -1.0f : (float)rnow;
-                S->estate[ed] &= (uint8_t)~E_STALE;
+                S->edge[ed].key = rnow < 0.0 ? -1.0f : (float)rnow;
+                S->edge[ed].state &= (uint8_t)~E_STALE;
                 now = 1;
             }
-            float key = S->ekey[ed];
+            float key = S->edge[ed].key;
             if (key > vb) vb = key;
-            uint32_t u = S->ev[2 * (size_t)ed] == v ? S->ev[2 * (size_t)ed + 1] : S->ev[2 * (size_t)ed];
+            uint32_t u = S->edge[ed].v[0] == v ? S->edge[ed].v[1] : S->edge[ed].v[0];
             if (S->vlock[u] == S->pass || !(key >= (float)tau)) continue;
             if (key > bkey || (key == bkey && ed < best)) {
                 bkey = key;
@@ -2816,7 +2834,7 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
     if (rho < tau) S->stats.attempt_low++;
 #endif
     if (S->oom) return -1;
-    S->ekey[best] = rho < 0.0 ? -1.0f : (float)rho;
+    S->edge[best].key = rho < 0.0 ? -1.0f : (float)rho;
     if (S->par && rho >= tau && !par_ring_owned(S, R)) return 2;
     int chosen = -1;
     if (rho >= tau && link_check(S, R) == NO_REASON) {
@@ -2836,14 +2854,14 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
         /* refused for reasons outside its key (topology, the costly
          * checks): out of the passes until one of its ends moves (the
          * exact queue evaluates it again); v's best key without it */
-        if (rho >= tau) S->ekey[best] = -1.0f;
+        if (rho >= tau) S->edge[best].key = -1.0f;
         float rest = -1.0f;
         for (uint32_t a = 0; a < cnt; a++) {
             const uint32_t *t = S->face[fl[a]].v;
             for (int c = 0; c < 3; c++) {
                 if (t[c] != v && t[(c + 1) % 3] != v) continue;
                 uint32_t ed = S->tedge[3 * (size_t)fl[a] + c];
-                if (!(S->eflag[ed] & E_DEAD) && S->ekey[ed] > rest) rest = S->ekey[ed];
+                if (!(S->edge[ed].flag & E_DEAD) && S->edge[ed].key > rest) rest = S->edge[ed].key;
             }
         }
         S->vbest[v] = rest;
@@ -2870,7 +2888,7 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
                  * the lazy queue, FEMLOD_SIMPLIFY_BOUND, is not used there);
                  * the cached optimum is gone with the endpoint */
                 uint32_t ed = S->tedge[3 * (size_t)f + c];
-                S->estate[ed] = (uint8_t)((S->estate[ed] | E_STALE) & ~E_OPT);
+                S->edge[ed].state = (uint8_t)((S->edge[ed].state | E_STALE) & ~E_OPT);
             }
         }
     }
@@ -3052,11 +3070,11 @@ static void par_eval_chunk(par_ctx *X, par_worker *w, size_t k) {
     size_t e0 = k * PAR_CHUNK, e1 = e0 + PAR_CHUNK < S->ne ? e0 + PAR_CHUNK : S->ne;
     for (size_t ed = e0; ed < e1 && !W->oom; ed++) {
         float key = -1.0f;
-        if (!(S->eflag[ed] & E_DEAD)) {
+        if (!(S->edge[ed].flag & E_DEAD)) {
             double rho = evaluate(W, &W->R, (uint32_t)ed);
             if (rho >= 0.0) key = (float)rho;
         }
-        S->ekey[ed] = key;
+        S->edge[ed].key = key;
     }
 }
 
@@ -3357,8 +3375,7 @@ static size_t band_par_pass(simp *S, par_ctx *X, double tau, size_t floor_live, 
 static int band_run(simp *S, const femlod_simplify_options *o, size_t floor_live, size_t live0, size_t *next) {
     S->vlock = fl_calloc(S->nv, sizeof *S->vlock);
     S->vbest = fl_alloc(S->nv, sizeof *S->vbest);
-    S->ekey = fl_alloc(S->ne, sizeof *S->ekey);
-    if (!S->vlock || !S->vbest || !S->ekey) return 0;
+    if (!S->vlock || !S->vbest) return 0;
     par_ctx X;
     memset(&X, 0, sizeof X);
     X.S = S;
@@ -3385,8 +3402,8 @@ static int band_run(simp *S, const femlod_simplify_options *o, size_t floor_live
     }
     float top = -1.0f;
     for (size_t ed = 0; ed < S->ne; ed++) {
-        float key = S->ekey[ed];
-        uint32_t a = S->ev[2 * ed], b = S->ev[2 * ed + 1];
+        float key = S->edge[ed].key;
+        uint32_t a = S->edge[ed].v[0], b = S->edge[ed].v[1];
         if (key > S->vbest[a]) S->vbest[a] = key;
         if (key > S->vbest[b]) S->vbest[b] = key;
         if (key > top) top = key;
@@ -3444,13 +3461,11 @@ static int band_run(simp *S, const femlod_simplify_options *o, size_t floor_live
     }
     STAT_TIME(3, t3);
     /* back to the queue's conventions */
-    for (size_t ed = 0; ed < S->ne; ed++) S->estate[ed] &= (uint8_t)~E_STALE;
+    for (size_t ed = 0; ed < S->ne; ed++) S->edge[ed].state &= (uint8_t)~E_STALE;
     free(S->vlock);
     free(S->vbest);
-    free(S->ekey);
     S->vlock = NULL;
     S->vbest = NULL;
-    S->ekey = NULL;
     ret = 1;
 done:
     par_free(&X);
