@@ -591,7 +591,10 @@ void femlod_collapse_log_free(femlod_collapse_log *log);
  * (result->dropped_degenerate counts the latter).
  * out and mesh must not be NULL (asserted). Fails with FEMLOD_EINPUT for
  * inconsistent options, FEMLOD_ENOMEM.
- * Deterministic: the same input and options give identical arrays. */
+ * Deterministic: the same input and options give identical arrays.
+ * After a run on 65,536 triangles or more it gives the memory it freed
+ * back to the system (malloc_trim where the C library is glibc), so that
+ * repeated runs in one process do not grow (docs/simplify.md). */
 femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **log, const femlod_mesh *mesh,
                               const femlod_simplify_options *options, femlod_simplify_result *result,
                               femlod_error *err);
