@@ -8,6 +8,7 @@
  * Each line: case name, output triangles, collapses, a 64-bit FNV-1a hash of
  * the output positions and triangles, one of the collapse log, and the
  * seconds (the only field that may differ between two runs). */
+#include "digest.h"
 #include "femlod.h"
 
 #include <stdio.h>
@@ -18,15 +19,6 @@
 #ifndef FEMLOD_SHARED_DATA
 #define FEMLOD_SHARED_DATA "../shared/data"
 #endif
-
-static uint64_t fnv(uint64_t h, const void *p, size_t n) {
-    const unsigned char *c = p;
-    for (size_t i = 0; i < n; i++) {
-        h ^= c[i];
-        h *= 1099511628211ull;
-    }
-    return h;
-}
 
 static double now(void) {
     struct timespec t;
@@ -121,25 +113,8 @@ int main(int argc, char **argv) {
             continue;
         }
         double t = now() - t0;
-        size_t nv = femlod_mesh_vertex_count(out), nt = femlod_mesh_triangle_count(out);
-        uint64_t hm = 1469598103934665603ull, hl = hm;
-        hm = fnv(hm, femlod_mesh_positions(out), 3 * nv * sizeof(double));
-        hm = fnv(hm, femlod_mesh_triangles(out), 3 * nt * sizeof(uint32_t));
-        size_t nc = femlod_collapse_log_count(log);
-        for (size_t x = 0; x < nc; x++) {
-            femlod_collapse cl;
-            femlod_collapse_log_get(log, x, &cl);
-            hl = fnv(hl, &cl.i, sizeof cl.i);
-            hl = fnv(hl, &cl.j, sizeof cl.j);
-            hl = fnv(hl, &cl.k, sizeof cl.k);
-            hl = fnv(hl, cl.position, sizeof cl.position);
-            hl = fnv(hl, &cl.e_size, sizeof cl.e_size);
-            hl = fnv(hl, cl.vstars, cl.vstar_count * sizeof *cl.vstars);
-            hl = fnv(hl, cl.faces, 3 * cl.face_count);
-        }
-        size_t nout = 0;
-        const uint32_t *on = femlod_collapse_log_output_nodes(log, &nout);
-        hl = fnv(hl, on, nout * sizeof *on);
+        size_t nt = femlod_mesh_triangle_count(out);
+        uint64_t hm = digest_mesh(out), hl = digest_log(log);
         printf("%-20s %7zu tris %7zu collapses (pre %zu) %s  mesh %016llx  log %016llx  %7.3f s\n", k->name, nt,
                res.collapses, res.prephase_collapses, femlod_stop_reason_name(res.stop_reason),
                (unsigned long long)hm, (unsigned long long)hl, t);

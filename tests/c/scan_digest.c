@@ -10,20 +10,12 @@
  * Usage: scan_digest DATA-FOLDER. Each line: case, output triangles,
  * collapses, fast collapses, FNV-1a hashes of the output mesh and of the
  * collapse log, and the rejection counts. */
+#include "digest.h"
 #include "femlod.h"
 
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-
-static uint64_t fnv(uint64_t h, const void *p, size_t n) {
-    const unsigned char *c = p;
-    for (size_t i = 0; i < n; i++) {
-        h ^= c[i];
-        h *= 1099511628211ull;
-    }
-    return h;
-}
 
 static int lock_left(void *payload, double x, double y, double z) {
     (void)payload;
@@ -41,19 +33,8 @@ static int digest(const char *name, const femlod_mesh *m, const femlod_simplify_
         fprintf(stderr, "%s: %s\n", name, err.message);
         return 1;
     }
-    size_t nv = femlod_mesh_vertex_count(out), nt = femlod_mesh_triangle_count(out);
-    uint64_t hm = 1469598103934665603ull, hl = hm;
-    hm = fnv(hm, femlod_mesh_positions(out), 3 * nv * sizeof(double));
-    hm = fnv(hm, femlod_mesh_triangles(out), 3 * nt * sizeof(uint32_t));
-    size_t nc = femlod_collapse_log_count(log);
-    for (size_t x = 0; x < nc; x++) {
-        femlod_collapse cl;
-        femlod_collapse_log_get(log, x, &cl);
-        hl = fnv(hl, &cl.i, sizeof cl.i);
-        hl = fnv(hl, &cl.j, sizeof cl.j);
-        hl = fnv(hl, cl.position, sizeof cl.position);
-        hl = fnv(hl, cl.vstars, cl.vstar_count * sizeof *cl.vstars);
-    }
+    size_t nt = femlod_mesh_triangle_count(out);
+    uint64_t hm = digest_mesh(out), hl = digest_log(log);
     printf("%s %zu %zu %zu %016llx %016llx", name, nt, res.collapses, res.fast_collapses,
            (unsigned long long)hm, (unsigned long long)hl);
     for (int k = 0; k < FEMLOD_REJECT_COUNT; k++) printf(" %zu", res.rejected[k]);
