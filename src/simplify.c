@@ -181,6 +181,7 @@ typedef struct ring {
 
 typedef struct simp_stats {
     size_t evals, settles, bounds, rings, cands, cand_ok, solves, pops, links, expensive, cells, items, tritri, skipped;
+    size_t deferred;
     size_t attempts, attempt_low, attempt_fresh;
     double t[6]; /* seconds: setup, pre-phase, first evaluation of the passes, passes, queue, output */
     size_t listed[4]; /* parallel passes: vertices listed in stage 0, 1, the remainder; sub-passes */
@@ -1012,42 +1013,45 @@ static int deviation_check(simp *S, ring *R, const double p[3], size_t *np) {
  * with margins: anything near a sector's border or near edge-on is "no
  * certificate" (the full tests run). */
 static int star_embedded(const double c[3], const double *const *u, const double *const *w, size_t nf) {
-    if (nf < 3) return 0;
+    if (nf < 3 || nf > 64) return 0;
+    /* each face's turn a x b, kept for the second loop; the margins are
+     * compared squared (no square roots: the decisions differ from the
+     * unsquared ones only within rounding of the margins, which are far
+     * above rounding, so both are certificates) */
+    double x[64][3], ea[64][3], eb[64][3];
     double n[3] = {0, 0, 0};
     for (size_t f = 0; f < nf; f++) {
-        double a[3], b[3], x[3];
-        sub3(a, u[f], c);
-        sub3(b, w[f], c);
-        cross3(x, a, b);
-        n[0] += x[0];
-        n[1] += x[1];
-        n[2] += x[2];
+        sub3(ea[f], u[f], c);
+        sub3(eb[f], w[f], c);
+        cross3(x[f], ea[f], eb[f]);
+        n[0] += x[f][0];
+        n[1] += x[f][1];
+        n[2] += x[f][2];
     }
-    double nn = sqrt(dot3(n, n));
-    if (!(nn > 0.0)) return 0;
-    double d[3]; /* reference direction: the first face's first edge */
-    sub3(d, u[0], c);
-    double dl = sqrt(dot3(d, d));
-    const double rel = 1e-9;
+    double nn2 = dot3(n, n);
+    /* squares of squares: keep clear of overflow and underflow */
+    if (!(nn2 > 1e-120 && nn2 < 1e120)) return 0;
+    const double *d = ea[0]; /* reference direction: the first face's first edge */
+    double dl2 = dot3(d, d);
+    const double rel2 = 1e-18, turn2 = 1e-12;
     int wind = 1; /* face 0's sector starts on d */
     for (size_t f = 0; f < nf; f++) {
-        double a[3], b[3], x[3];
-        sub3(a, u[f], c);
-        sub3(b, w[f], c);
-        double al = sqrt(dot3(a, a)), bl = sqrt(dot3(b, b));
-        cross3(x, a, b);
-        /* turns positively, clearly (not edge-on, not degenerate) */
-        if (!(dot3(x, n) > 1e-6 * al * bl * nn)) return 0;
+        const double *a = ea[f], *b = eb[f];
+        double al2 = dot3(a, a), bl2 = dot3(b, b);
+        /* turns positively, clearly (not edge-on, not degenerate):
+         * x.n > 1e-6 |a| |b| |n| */
+        double xn = dot3(x[f], n);
+        if (!(xn > 0.0 && xn * xn > turn2 * al2 * bl2 * nn2)) return 0;
         if (f == 0) continue;
+        /* the face before face 0 ends on d itself: outside (sectors are
+         * half-open, [u, w)) */
+        if (w[f] == u[0]) continue;
         double ad[3], db[3];
         cross3(ad, a, d);
         cross3(db, d, b);
         double t1 = dot3(ad, n), t2 = dot3(db, n);
-        double m1 = rel * al * dl * nn, m2 = rel * dl * bl * nn;
-        /* the face before face 0 ends on d itself: outside (sectors are
-         * half-open, [u, w)) */
-        if (w[f] == u[0]) continue;
-        if ((t1 > -m1 && t1 < m1) || (t2 > -m2 && t2 < m2)) return 0; /* d near a border */
+        /* d near a border: |t1| < 1e-9 |a| |d| |n| or the same for t2 */
+        if (t1 * t1 < rel2 * al2 * dl2 * nn2 || t2 * t2 < rel2 * dl2 * bl2 * nn2) return 0;
         if (t1 > 0.0 && t2 > 0.0) wind++;
     }
     return wind == 1;
@@ -1137,13 +1141,16 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
      * faces), told by their id range, then by a scan of the ring (no
      * per-face mark: its reads would miss the cache at every item) */
     uint32_t fmin = UINT32_MAX, fmax = 0;
+    uint64_t fbits = 0; /* bit f % 64 of every such face: most others skip the scan */
     for (size_t r = 0; r < R->n; r++) {
         fmin = R->face[r] < fmin ? R->face[r] : fmin;
         fmax = R->face[r] > fmax ? R->face[r] : fmax;
+        fbits |= (uint64_t)1 << (R->face[r] & 63u);
     }
     for (size_t s = 0; s < R->ns; s++) {
         fmin = R->sface[s] < fmin ? R->sface[s] : fmin;
         fmax = R->sface[s] > fmax ? R->sface[s] : fmax;
+        fbits |= (uint64_t)1 << (R->sface[s] & 63u);
     }
     /* star certificates: k's now; a ring vertex's (interior, manifold)
      * only when a triangle at it meets a new triangle's box (link_cert):
@@ -1191,7 +1198,8 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                         STAT(items);
                         if ((B->first[s] & need) != need) continue; /* met in an earlier cell */
                         uint32_t f = B->item[s];
-                        if (f >= fmin && f <= fmax && ring_has_face(R, f)) continue; /* being replaced */
+                        if (f >= fmin && f <= fmax && (fbits >> (f & 63u) & 1u) && ring_has_face(R, f))
+                            continue; /* being replaced */
                         const uint32_t *t = S->face[f].v;
                         const double *Q[3] = {P(S, t[0]), P(S, t[1]), P(S, t[2])};
                         double qb[6];
@@ -2707,6 +2715,12 @@ static int run_queue_1(simp *S, const femlod_simplify_options *o, size_t live0, 
 #ifndef FEMLOD_SIMPLIFY_BAND
 #define FEMLOD_SIMPLIFY_BAND 0.9 /* each pass lowers the threshold by this factor */
 #endif
+#ifndef FEMLOD_SIMPLIFY_DEFER
+/* A stale edge whose last key is below this times the pass's threshold is
+ * not evaluated at a visit (0: every stale edge is; docs/simplify.md
+ * "Session 12") */
+#define FEMLOD_SIMPLIFY_DEFER 0.85
+#endif
 
 static int u32vec_push(u32vec *a, uint32_t x) {
     if (a->n == a->cap && !buf_reserve((void **)&a->v, &a->cap, a->n + 1, sizeof *a->v)) return 0;
@@ -2802,7 +2816,17 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
             if (S->edge[ed].flag & E_DEAD) continue;
             int now = 0;
             double rnow = -1.0;
-            if (S->edge[ed].state & E_STALE) {
+            if ((S->edge[ed].state & E_STALE) && FEMLOD_SIMPLIFY_DEFER > 0.0 && S->edge[ed].key >= 0.0f &&
+                S->edge[ed].key < (float)(FEMLOD_SIMPLIFY_DEFER * tau)) {
+                /* it waits, its last key standing in for its priority:
+                 * that keeps v listed until the threshold comes down to
+                 * about that key, and an edge that reached it a pass ago
+                 * seldom jumps above the band (the stale edges evaluated
+                 * at visits that collapse nothing were more than half of
+                 * all evaluations); an invalid last key (< 0) says
+                 * nothing, so that edge is evaluated */
+                STAT(deferred);
+            } else if (S->edge[ed].state & E_STALE) {
                 rnow = evaluate(S, R, ed);
                 if (S->oom) return -1;
                 S->edge[ed].key = rnow < 0.0 ? -1.0f : (float)rnow;
@@ -3003,10 +3027,10 @@ static void par_for(par_ctx *X, size_t n, void (*fn)(par_ctx *, par_worker *, si
 
 static void par_free(par_ctx *X) {
 #if FEMLOD_SIMPLIFY_STATS
-    /* the workers' counts (the first 17 fields, all size_t) */
+    /* the workers' counts (the fields before t, all size_t) */
     for (int t = 0; t < X->nw; t++) {
         size_t *a = (size_t *)&X->S->stats, *w = (size_t *)&X->wk[t].W.stats;
-        for (int k = 0; k < 17; k++) a[k] += w[k];
+        for (size_t k = 0; k < offsetof(simp_stats, t) / sizeof(size_t); k++) a[k] += w[k];
     }
 #endif
     for (int t = 0; t < X->nw; t++) simp_free_scratch(&X->wk[t].W);
@@ -3707,11 +3731,11 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
         double n = S->collapses ? (double)S->collapses : 1.0;
         fprintf(stderr,
                 "simplify stats per collapse (%zu): bounds %.2f evals %.2f (settle %.2f, prefix fail %.2f) cands %.2f (ok %.2f) "
-                "solves %.2f pops %.2f links %.2f expensive %.2f cells %.1f items %.1f tritri %.1f skipped %.2f\n",
+                "solves %.2f pops %.2f links %.2f expensive %.2f cells %.1f items %.1f tritri %.1f skipped %.2f deferred %.2f\n",
                 S->collapses, (double)c->bounds / n, (double)c->evals / n, (double)c->settles / n, (double)(c->evals + c->bounds - c->rings) / n,
                 (double)c->cands / n, (double)c->cand_ok / n, (double)c->solves / n, (double)c->pops / n,
                 (double)c->links / n, (double)c->expensive / n, (double)c->cells / n, (double)c->items / n,
-                (double)c->tritri / n, (double)c->skipped / n);
+                (double)c->tritri / n, (double)c->skipped / n, (double)c->deferred / n);
     }
 #endif
     if (result) {
