@@ -2048,6 +2048,92 @@ static void face_cache_range(void *arg, size_t f0, size_t f1, int part) {
     for (size_t f = f0; f < f1; f++) face_update_cache(S, (uint32_t)f);
 }
 
+/* Whether the faces around v form one fan (flooded from the first face
+ * through edges at v); mark: cnt bytes of scratch, or NULL for the shared
+ * face marks (stamps). */
+#ifndef FEMLOD_SIMPLIFY_PINCH_LOCAL
+#define FEMLOD_SIMPLIFY_PINCH_LOCAL 256 /* tests/CMakeLists.txt sets 2: nearly every vertex takes the shared marks */
+#endif
+#define PINCH_LOCAL FEMLOD_SIMPLIFY_PINCH_LOCAL
+static int fan_is_one(simp *S, uint32_t v, uint8_t *mark) {
+    uint32_t cnt = S->fcount[v];
+    const uint32_t *fl = S->refs + S->fstart[v];
+    uint32_t mk = mark ? 1u : next_stamp(S);
+#define FAN_MARKED(m) (mark ? mark[m] != 0 : S->fmark[fl[m]] == mk)
+#define FAN_MARK(m) (mark ? (void)(mark[m] = 1) : (void)(S->fmark[fl[m]] = mk))
+    if (mark) memset(mark, 0, cnt);
+    uint32_t reached = 1, changed = 1;
+    FAN_MARK(0);
+    while (changed) {
+        changed = 0;
+        for (uint32_t m = 0; m < cnt; m++) {
+            if (FAN_MARKED(m)) continue;
+            const uint32_t *te = S->tedge + 3 * (size_t)fl[m];
+            for (uint32_t w = 0; w < cnt && !FAN_MARKED(m); w++) {
+                if (!FAN_MARKED(w)) continue;
+                const uint32_t *tw = S->tedge + 3 * (size_t)fl[w];
+                for (int x = 0; x < 3; x++)
+                    for (int y = 0; y < 3; y++)
+                        if (te[x] == tw[y] && (S->edge[te[x]].v[0] == v || S->edge[te[x]].v[1] == v)) {
+                            FAN_MARK(m);
+                            x = y = 3;
+                        }
+            }
+            if (FAN_MARKED(m)) {
+                reached++;
+                changed = 1;
+            }
+        }
+    }
+#undef FAN_MARKED
+#undef FAN_MARK
+    return reached == cnt;
+}
+
+static void pinched_range(void *arg, size_t v0, size_t v1, int part) {
+    (void)part;
+    simp *S = arg;
+    uint8_t mark[PINCH_LOCAL];
+    for (size_t v = v0; v < v1; v++) {
+        uint32_t cnt = S->fcount[v];
+        if (cnt == 0 || cnt > PINCH_LOCAL || (S->vflag[v] & V_NONMANIFOLD)) continue;
+        if (!fan_is_one(S, (uint32_t)v, mark)) S->vflag[v] |= V_NONMANIFOLD;
+    }
+}
+
+/* An edge's sharpness: 1 at a boundary or non-manifold edge, (1 - cos)/2
+ * where its two faces' normals part by more than the feature angle, else
+ * 0 (not a feature). */
+static double edge_sharpness(const simp *S, uint32_t e, double cos_feat) {
+    if (S->edge[e].nf != 2) return 1.0;
+    if (!(S->feat_angle > 0.0)) return 0.0;
+    uint32_t a = S->edge[e].v[0];
+    /* the two faces: scan a's list */
+    const uint32_t *fl = S->refs + S->fstart[a];
+    uint32_t f2[2], n2 = 0;
+    for (uint32_t m = 0; m < S->fcount[a] && n2 < 2; m++) {
+        const uint32_t *te = S->tedge + 3 * (size_t)fl[m];
+        if (te[0] == e || te[1] == e || te[2] == e) f2[n2++] = fl[m];
+    }
+    if (n2 != 2) return 0.0;
+    const float *x = S->face[f2[0]].n, *y = S->face[f2[1]].n;
+    /* a degenerate face (NaN normal) counts as normal 0: c = 0 */
+    double c = isnan(x[0]) || isnan(y[0]) ? 0.0 : (double)x[0] * y[0] + (double)x[1] * y[1] + (double)x[2] * y[2];
+    return c < cos_feat ? 0.5 * (1.0 - c) : 0.0;
+}
+
+typedef struct feat_ctx {
+    simp *S;
+    double cos_feat;
+} feat_ctx;
+
+static void feature_range(void *arg, size_t e0, size_t e1, int part) {
+    (void)part;
+    feat_ctx *C = arg;
+    for (size_t e = e0; e < e1; e++)
+        if (edge_sharpness(C->S, (uint32_t)e, C->cos_feat) > 0.0) C->S->edge[e].flag |= E_FEATURE;
+}
+
 /* The face-plane quadrics (4.1 (2)-(4)), gathered per vertex over its
  * faces in increasing face order: the sums of a face-order scatter, in
  * the same order, so the same bits. With area weights, renormalised per
@@ -2363,38 +2449,13 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
             S->vflag[b] |= V_NONMANIFOLD;
         }
     }
-    /* pinched vertices: more than one fan of faces around them */
-    for (size_t v = 0; v < nv; v++) {
-        uint32_t cnt = S->fcount[v];
-        if (cnt == 0 || (S->vflag[v] & V_NONMANIFOLD)) continue;
-        const uint32_t *fl = S->refs + S->fstart[v];
-        uint32_t mk = next_stamp(S);
-        /* flood the fan from the first face through edges at v */
-        uint32_t reached = 1, changed = 1;
-        S->fmark[fl[0]] = mk;
-        while (changed) {
-            changed = 0;
-            for (uint32_t m = 0; m < cnt; m++) {
-                if (S->fmark[fl[m]] == mk) continue;
-                const uint32_t *te = S->tedge + 3 * (size_t)fl[m];
-                for (uint32_t w = 0; w < cnt && S->fmark[fl[m]] != mk; w++) {
-                    if (S->fmark[fl[w]] != mk) continue;
-                    const uint32_t *tw = S->tedge + 3 * (size_t)fl[w];
-                    for (int x = 0; x < 3; x++)
-                        for (int y = 0; y < 3; y++)
-                            if (te[x] == tw[y] && (S->edge[te[x]].v[0] == v || S->edge[te[x]].v[1] == v)) {
-                                S->fmark[fl[m]] = mk;
-                                x = y = 3;
-                            }
-                }
-                if (S->fmark[fl[m]] == mk) {
-                    reached++;
-                    changed = 1;
-                }
-            }
-        }
-        if (reached != cnt) S->vflag[v] |= V_NONMANIFOLD;
-    }
+    /* pinched vertices: more than one fan of faces around them (in
+     * parallel, each vertex's flood in its own marks; the rare vertex of
+     * more than PINCH_LOCAL faces afterwards, with the shared ones) */
+    par_ranges(nth, nv, pinched_range, S);
+    for (size_t v = 0; v < nv; v++)
+        if (S->fcount[v] > PINCH_LOCAL && !(S->vflag[v] & V_NONMANIFOLD) && !fan_is_one(S, (uint32_t)v, NULL))
+            S->vflag[v] |= V_NONMANIFOLD;
     memset(S->fmark, 0, nt * sizeof *S->fmark);
     S->stamp = 0;
     memset(S->vmark, 0, nv * sizeof *S->vmark);
@@ -2402,41 +2463,24 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     SETUP_T(6);
     par_ranges(nth, nv, plane_quadrics, S);
     SETUP_T(7);
-    /* features and line quadrics, weighted by sharpness */
-    double cos_feat = S->feat_angle > 0.0 ? cos(S->feat_angle * PI / 180.0) : -2.0;
+    /* features (in parallel, per edge) and line quadrics, weighted by
+     * sharpness (in edge order: the same sums as one pass) */
+    feat_ctx FC = {S, S->feat_angle > 0.0 ? cos(S->feat_angle * PI / 180.0) : -2.0};
+    par_ranges(nth, ne, feature_range, &FC);
     for (size_t e = 0; e < ne; e++) {
+        if (!(S->edge[e].flag & E_FEATURE)) continue;
         uint32_t a = S->edge[e].v[0], b = S->edge[e].v[1];
-        double sharp = 0.0;
-        if (S->edge[e].nf != 2) {
-            sharp = 1.0;
-        } else if (S->feat_angle > 0.0) {
-            /* the two faces: scan a's list */
-            const uint32_t *fl = S->refs + S->fstart[a];
-            uint32_t f2[2], n2 = 0;
-            for (uint32_t m = 0; m < S->fcount[a] && n2 < 2; m++) {
-                const uint32_t *te = S->tedge + 3 * (size_t)fl[m];
-                if (te[0] == e || te[1] == e || te[2] == e) f2[n2++] = fl[m];
-            }
-            if (n2 == 2) {
-                const float *x = S->face[f2[0]].n, *y = S->face[f2[1]].n;
-                /* a degenerate face (NaN normal) counts as normal 0: c = 0 */
-                double c = isnan(x[0]) || isnan(y[0]) ? 0.0 : (double)x[0] * y[0] + (double)x[1] * y[1] + (double)x[2] * y[2];
-                if (c < cos_feat) sharp = 0.5 * (1.0 - c);
-            }
-        }
-        if (sharp > 0.0) {
-            S->edge[e].flag |= E_FEATURE;
-            if (S->fdeg[a] < 255) S->fdeg[a]++;
-            if (S->fdeg[b] < 255) S->fdeg[b]++;
-            if (S->feat_w > 0.0) {
-                double u[3];
-                sub3(u, P(S, b), P(S, a));
-                double l = sqrt(dot3(u, u));
-                if (l > 0.0) {
-                    for (int k = 0; k < 3; k++) u[k] /= l;
-                    fl_quadric_add_line(S->q + a, u, P(S, a), S->feat_w * sharp);
-                    fl_quadric_add_line(S->q + b, u, P(S, a), S->feat_w * sharp);
-                }
+        double sharp = edge_sharpness(S, (uint32_t)e, FC.cos_feat);
+        if (S->fdeg[a] < 255) S->fdeg[a]++;
+        if (S->fdeg[b] < 255) S->fdeg[b]++;
+        if (S->feat_w > 0.0) {
+            double u[3];
+            sub3(u, P(S, b), P(S, a));
+            double l = sqrt(dot3(u, u));
+            if (l > 0.0) {
+                for (int k = 0; k < 3; k++) u[k] /= l;
+                fl_quadric_add_line(S->q + a, u, P(S, a), S->feat_w * sharp);
+                fl_quadric_add_line(S->q + b, u, P(S, a), S->feat_w * sharp);
             }
         }
     }
