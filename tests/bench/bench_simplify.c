@@ -1,7 +1,9 @@
 /* bench_simplify.c - femlod_simplify against meshopt_simplify (issue 3,
  * item 6): cover.obj subdivided twice (about 1.25M triangles) reduced to
  * 50,000 and 12,000 triangles by both, in one run. Prints the median time
- * of RUNS runs of each, the ratio, peak memory (getrusage) and memory per
+ * of RUNS runs of each (interleaved: each round runs meshoptimizer and
+ * every femlod mode once, so that the machine's changing load falls on
+ * all alike), the ratio, peak memory (getrusage) and memory per
  * input triangle, and both outputs' stretch min/avg and size max.
  *
  * Both wall time and this process's CPU time are measured: on a shared
@@ -95,32 +97,24 @@ int main(int argc, char **argv) {
     const int threads[3] = {0, 1, 0};
     const char *const names[3] = {"femlod exact   ", "femlod fast 2/1", "femlod fast 2  "};
     for (int k = 0; k < 2; k++) {
-        double tm[MAXRUNS], cm[MAXRUNS];
+        /* rounds: meshoptimizer, then each femlod mode, RUNS times; the
+         * runs of one round follow each other, so that a change in the
+         * machine's load (it is shared) falls on every contender alike
+         * rather than on whichever ran while it lasted */
+        double tm[MAXRUNS], cm[MAXRUNS], tf[3][MAXRUNS], cf[3][MAXRUNS];
         size_t mo_n = 0;
         float mo_err = 0;
+        femlod_mesh *out[3] = {NULL, NULL, NULL};
+        femlod_simplify_result res[3];
+        int same[3] = {1, 1, 1};
+        double memf[3] = {0, 0, 0};
         for (int r = 0; r < runs; r++) {
             double t0 = now(), c0 = cpu_now();
             mo_n = meshopt_simplify(dst, idx, 3 * nt, fpos, nv, 3 * sizeof(float), 3 * targets[k], 1e30f, 0,
                                     &mo_err);
             tm[r] = now() - t0;
             cm[r] = cpu_now() - c0;
-        }
-        femlod_mesh *mo = NULL;
-        femlod_mesh_create(&mo, pos, nv, dst, mo_n / 3, NULL);
-        femlod_quality qm;
-        femlod_mesh_quality(mo, &qm, NULL);
-        double b = median(tm, runs), bc = median(cm, runs);
-        printf("\ntarget %zu (median of %d runs)\n", targets[k], runs);
-        printf("  meshoptimizer %7zu triangles            %8.3f s (cpu %.3f s)  stretch min %.3f avg %.3f  size max %.2f  "
-               "valence max %u  closed %d\n",
-               mo_n / 3, b, bc, qm.stretch_min, qm.stretch_avg, qm.size_max, (unsigned)qm.valence_max,
-               qm.topology.closed);
-        for (int mode = 0; mode < 3; mode++) {
-            double tf[MAXRUNS], cf[MAXRUNS];
-            femlod_mesh *out = NULL;
-            femlod_simplify_result res;
-            int same = 1;
-            for (int r = 0; r < runs; r++) {
+            for (int mode = 0; mode < 3; mode++) {
                 femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
                 o.target = targets[k];
                 o.tolerance = 0.15;
@@ -130,36 +124,51 @@ int main(int argc, char **argv) {
                 o.fast_above = modes[mode];
                 o.threads = threads[mode];
                 femlod_mesh *x = NULL;
-                double t0 = now(), c0 = cpu_now();
-                if (femlod_simplify(&x, NULL, m, &o, &res, &err) != FEMLOD_OK) {
+                t0 = now();
+                c0 = cpu_now();
+                if (femlod_simplify(&x, NULL, m, &o, &res[mode], &err) != FEMLOD_OK) {
                     fprintf(stderr, "bench_simplify: %s\n", err.message);
                     return 1;
                 }
-                tf[r] = now() - t0;
-                cf[r] = cpu_now() - c0;
-                if (out) {
-                    same &= femlod_mesh_triangle_count(x) == femlod_mesh_triangle_count(out) &&
-                            memcmp(femlod_mesh_positions(x), femlod_mesh_positions(out),
-                                   3 * femlod_mesh_vertex_count(x) * sizeof(double)) == 0;
+                tf[mode][r] = now() - t0;
+                cf[mode][r] = cpu_now() - c0;
+                /* peak memory after this mode's first run (getrusage's
+                 * peak only grows: later modes show the largest so far) */
+                if (r == 0) memf[mode] = peak_mb();
+                if (out[mode]) {
+                    same[mode] &= femlod_mesh_triangle_count(x) == femlod_mesh_triangle_count(out[mode]) &&
+                                  memcmp(femlod_mesh_positions(x), femlod_mesh_positions(out[mode]),
+                                         3 * femlod_mesh_vertex_count(x) * sizeof(double)) == 0;
                     femlod_mesh_free(x);
                 } else {
-                    out = x;
+                    out[mode] = x;
                 }
             }
-            double memf = peak_mb();
+        }
+        femlod_mesh *mo = NULL;
+        femlod_mesh_create(&mo, pos, nv, dst, mo_n / 3, NULL);
+        femlod_quality qm;
+        femlod_mesh_quality(mo, &qm, NULL);
+        double b = median(tm, runs), bc = median(cm, runs);
+        printf("\ntarget %zu (median of %d interleaved runs)\n", targets[k], runs);
+        printf("  meshoptimizer %7zu triangles            %8.3f s (cpu %.3f s)  stretch min %.3f avg %.3f  size max %.2f  "
+               "valence max %u  closed %d\n",
+               mo_n / 3, b, bc, qm.stretch_min, qm.stretch_avg, qm.size_max, (unsigned)qm.valence_max,
+               qm.topology.closed);
+        for (int mode = 0; mode < 3; mode++) {
             femlod_quality qf;
-            femlod_mesh_quality(out, &qf, NULL);
-            double a = median(tf, runs), ac = median(cf, runs);
+            femlod_mesh_quality(out[mode], &qf, NULL);
+            double a = median(tf[mode], runs), ac = median(cf[mode], runs);
             printf("  %s%7zu triangles (%s)  %8.3f s (cpu %.3f s)  stretch min %.3f avg %.3f  size max %.2f  "
                    "valence max %u  closed %d  repeatable %s\n",
-                   names[mode], femlod_mesh_triangle_count(out), femlod_stop_reason_name(res.stop_reason), a, ac,
-                   qf.stretch_min, qf.stretch_avg, qf.size_max, (unsigned)qf.valence_max, qf.topology.closed,
-                   same ? "yes" : "NO");
+                   names[mode], femlod_mesh_triangle_count(out[mode]), femlod_stop_reason_name(res[mode].stop_reason),
+                   a, ac, qf.stretch_min, qf.stretch_avg, qf.size_max, (unsigned)qf.valence_max, qf.topology.closed,
+                   same[mode] ? "yes" : "NO");
             printf("    ratio to meshoptimizer: %.1fx (cpu %.1fx); %zu of %zu collapses in fast passes on %d thread(s); "
                    "peak memory so far %.0f MB, %.0f bytes per input triangle above the loaded input\n",
-                   b > 0 ? a / b : 0.0, bc > 0 ? ac / bc : 0.0, res.fast_collapses, res.collapses, res.threads, memf,
-                   (memf - mem0) * 1048576.0 / (double)nt);
-            femlod_mesh_free(out);
+                   b > 0 ? a / b : 0.0, bc > 0 ? ac / bc : 0.0, res[mode].fast_collapses, res[mode].collapses,
+                   res[mode].threads, memf[mode], (memf[mode] - mem0) * 1048576.0 / (double)nt);
+            femlod_mesh_free(out[mode]);
         }
         femlod_mesh_free(mo);
     }
