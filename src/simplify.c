@@ -2464,7 +2464,9 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     par_ranges(nth, nv, plane_quadrics, S);
     SETUP_T(7);
     /* features (in parallel, per edge) and line quadrics, weighted by
-     * sharpness (in edge order: the same sums as one pass) */
+     * sharpness (in edge order: the same sums as one pass; the sharpness of
+     * the few feature edges is computed again here rather than kept in a
+     * per-edge array for all of them) */
     feat_ctx FC = {S, S->feat_angle > 0.0 ? cos(S->feat_angle * PI / 180.0) : -2.0};
     par_ranges(nth, ne, feature_range, &FC);
     for (size_t e = 0; e < ne; e++) {
