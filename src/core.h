@@ -74,6 +74,11 @@ FL_INTERNAL femlod_status fl_progress_cancelled(femlod_error *err, const char *w
 FL_INTERNAL void *fl_alloc(size_t count, size_t size);
 FL_INTERNAL void *fl_calloc(size_t count, size_t size);
 FL_INTERNAL void *fl_realloc(void *p, size_t count, size_t size);
+/* Maps the whole pages of [p, p + bytes) now when bytes >= 1 MiB (Linux
+ * MADV_POPULATE_WRITE; elsewhere nothing) and returns p. fl_alloc,
+ * fl_calloc and fl_realloc do it to every block they return; other large
+ * blocks that will be written whole can call it (error.c says why). */
+FL_INTERNAL void *fl_populate(void *p, size_t bytes);
 
 /* }====== */
 

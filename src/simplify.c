@@ -62,6 +62,7 @@
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h> /* getrusage: the stats build's fault counts */
 #include <time.h>
 #include <unistd.h>
 
@@ -188,6 +189,7 @@ typedef struct simp_stats {
     /* and their seconds; [3]: in par_for; [4..9]: listing, bucketing, task
      * set-up, merge, grid rebuilds, compactions */
     double tstage[10];
+    double tpass; /* when the last pass (or the first evaluation) ended */
 } simp_stats;
 
 /* Per-thread buffers of the checks, grown on demand. */
@@ -451,7 +453,7 @@ static void *alloc_lines(size_t n, size_t size) {
     if (size && n > SIZE_MAX / size) return NULL;
     void *p = NULL;
     size_t bytes = n * size;
-    return posix_memalign(&p, 64, bytes ? bytes : 64) == 0 ? p : NULL;
+    return posix_memalign(&p, 64, bytes ? bytes : 64) == 0 ? fl_populate(p, bytes) : NULL;
 }
 
 static uint32_t next_stamp(simp *S) {
@@ -2266,7 +2268,15 @@ static void edge_renumber(void *arg, size_t f0, size_t f1, int part) {
 
 #if FEMLOD_SIMPLIFY_STATS
 static double setup_t0;
-#define SETUP_T(k) (fprintf(stderr, "setup %d %.3f\n", (k), now_seconds() - setup_t0), (void)0)
+/* the process's page faults so far (minor: first touches of fresh pages,
+ * which cost 10-28 microseconds each on the VMs measured: error.c) */
+static long minor_faults(void) {
+    struct rusage u;
+    getrusage(RUSAGE_SELF, &u);
+    return u.ru_minflt;
+}
+#define SETUP_T(k) \
+    (fprintf(stderr, "setup %d %.3f faults %ld\n", (k), now_seconds() - setup_t0, minor_faults()), (void)0)
 #else
 #define SETUP_T(k) ((void)0)
 #endif
@@ -3491,6 +3501,9 @@ static int band_run(simp *S, const femlod_simplify_options *o, size_t floor_live
     double tau = (double)top * FEMLOD_SIMPLIFY_BAND;
     STAT_TIME(2, t2);
 #if FEMLOD_SIMPLIFY_STATS
+    S->stats.tpass = now_seconds();
+#endif
+#if FEMLOD_SIMPLIFY_STATS
     double t3 = now_seconds();
 #endif
     while (top >= 0.0f && S->live > floor_live) {
@@ -3529,6 +3542,14 @@ static int band_run(simp *S, const femlod_simplify_options *o, size_t floor_live
                 if (S->vbest[v] > top && S->vbest[v] < FLT_MAX) top = S->vbest[v];
             }
         }
+#if FEMLOD_SIMPLIFY_STATS
+        {
+            double tn = now_seconds();
+            fprintf(stderr, "pass %u tau %.4f live %zu collapses %zu seconds %.3f faults %ld\n", S->pass, tau, S->live,
+                    done, tn - S->stats.tpass, minor_faults());
+            S->stats.tpass = tn;
+        }
+#endif
         if (S->oom) goto done;
         /* next band; a pass without a collapse jumps to the best key left
          * (none left: done) */
