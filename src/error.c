@@ -34,18 +34,20 @@ femlod_status fl_error(femlod_error *err, femlod_status status, const char *fmt,
     return status;
 }
 
-/* Blocks of FL_POPULATE_MIN bytes or more are populated when allocated:
- * one madvise(MADV_POPULATE_WRITE) maps all their pages at once instead of
- * one page fault per 4 KiB page on first touch. On the virtual machines
- * femlod is measured on, a page fault costs 10-28 microseconds (the
- * hypervisor's shadow page tables; more when two threads fault at once),
- * so the 90,000 faults of the simplifier's set-up on the 1.25M-triangle
- * benchmark took 0.9-1.3 s; populated, the set-up takes 0.75 s instead of
- * 1.6 s on two threads (docs/design.md "Memory: populated blocks"). Pages
- * already mapped cost nothing (4 ms per 400 MB), so a grown block is
- * populated whole. A kernel without the call (before Linux 5.14), or
- * another system, keeps the faults; a failure is ignored (the pages then
- * fault on first touch as before). */
+/* fl_populate: one madvise(MADV_POPULATE_WRITE) maps all the pages of a
+ * block at once instead of one page fault per 4 KiB page on first touch.
+ * On the virtual machines femlod is measured on, a first-touch fault costs
+ * 10-28 microseconds (more when two threads fault at once), so the 90,000
+ * faults of the simplifier's set-up on the 1.25M-triangle benchmark took
+ * 0.9-1.3 s; populated, the set-up takes 0.75 s instead of 1.6 s on two
+ * threads (docs/design.md "Memory: populated blocks"). Pages already mapped
+ * cost nothing (4 ms per 400 MB), so a grown block may be populated whole.
+ * Only blocks that will be written whole are populated (the simplifier's
+ * arrays, sized from a valid mesh), never one sized from a file's header
+ * before the file is checked: that would commit memory a malformed file
+ * only claims. A kernel without the call (before Linux 5.14), or another
+ * system, keeps the faults; a failure is ignored (the pages then fault on
+ * first touch as before). */
 #define FL_POPULATE_MIN ((size_t)1 << 20)
 
 void *fl_populate(void *p, size_t bytes) {
@@ -64,20 +66,18 @@ void *fl_populate(void *p, size_t bytes) {
 void *fl_alloc(size_t count, size_t size) {
     size_t bytes;
     if (__builtin_mul_overflow(count, size, &bytes)) return NULL;
-    return fl_populate(malloc(bytes ? bytes : 1), bytes);
+    return malloc(bytes ? bytes : 1);
 }
 
 void *fl_calloc(size_t count, size_t size) {
     if (count == 0 || size == 0) return calloc(1, 1);
-    size_t bytes;
-    if (__builtin_mul_overflow(count, size, &bytes)) return NULL;
-    return fl_populate(calloc(count, size), bytes);
+    return calloc(count, size);
 }
 
 void *fl_realloc(void *p, size_t count, size_t size) {
     size_t bytes;
     if (__builtin_mul_overflow(count, size, &bytes)) return NULL;
-    return fl_populate(realloc(p, bytes ? bytes : 1), bytes);
+    return realloc(p, bytes ? bytes : 1);
 }
 
 void fl_progress_init(fl_progress *p, femlod_progress_fn fn, void *payload, size_t total) {

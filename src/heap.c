@@ -27,12 +27,11 @@ int fl_heap_init(fl_heap *h, size_t capacity) {
     h->capacity = capacity;
     /* 4 spare entries: e[1] (and so every group of four children) starts a
      * 64-byte cache line */
-    /* not fl_alloc, which populates every page: the entries fill only as
-     * far as the queue grows, and after fast passes it holds a small part
-     * of the edges, so these pages are left to fault when first used */
-    size_t bytes;
-    h->base = __builtin_mul_overflow(capacity + 4, sizeof *h->e, &bytes) ? NULL : malloc(bytes);
-    h->pos = fl_alloc(capacity, sizeof *h->pos);
+    /* the positions are all written below, so mapped at once (fl_populate);
+     * the entries fill only as far as the queue grows (after fast passes, a
+     * small part of the edges), so their pages fault when first used */
+    h->base = fl_alloc(capacity + 4, sizeof *h->e);
+    h->pos = fl_populate(fl_alloc(capacity, sizeof *h->pos), capacity * sizeof *h->pos);
     if (h->base) {
         size_t skip = (64 - ((uintptr_t)(h->base + 1) & 63)) % 64 / sizeof *h->e;
         h->e = h->base + skip;

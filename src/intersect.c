@@ -314,7 +314,7 @@ _Static_assert(sizeof(fl_grid_block) == 64, "a grid block is one cache line");
 static int blocks_resize(fl_grid *g, size_t n) {
     if (n == 0 || n > SIZE_MAX / sizeof(fl_grid_block) - 1) return 0;
     size_t old = g->blocks ? (size_t)((char *)g->blocks - (char *)g->blocks_mem) : 0;
-    char *m = fl_realloc(g->blocks_mem, n + 1, sizeof(fl_grid_block));
+    char *m = fl_populate(fl_realloc(g->blocks_mem, n + 1, sizeof(fl_grid_block)), (n + 1) * sizeof(fl_grid_block));
     if (!m) return 0;
     size_t off = (size_t)(-(uintptr_t)m & 63u);
     if (g->blocks && off != old) memmove(m + off, m + old, g->nblocks * sizeof(fl_grid_block));
@@ -343,7 +343,7 @@ int fl_grid_init(fl_grid *g, const double lo[3], const double hi[3], double h, s
     g->inv_h = 1.0 / h;
     for (int k = 0; k < 3; k++) g->origin[k] = lo[k];
     size_t cells = (size_t)g->n[0] * (size_t)g->n[1] * (size_t)g->n[2];
-    g->cell = fl_alloc(cells, sizeof *g->cell);
+    g->cell = fl_populate(fl_alloc(cells, sizeof *g->cell), cells * sizeof *g->cell);
     g->capblocks = cells / 2 + 1024;
     g->free_block = UINT32_MAX;
     if (!g->cell || !blocks_resize(g, g->capblocks)) {

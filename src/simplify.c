@@ -1387,7 +1387,7 @@ static int compact_refs(simp *S) {
     for (size_t v = 0; v < S->nv; v++) total += S->fcount[v];
     /* room for as many appended lists again: compaction stays amortised O(1) */
     size_t cap = 2 * total + 1024;
-    uint32_t *nr = fl_alloc(cap, sizeof *nr);
+    uint32_t *nr = fl_populate(fl_alloc(cap, sizeof *nr), total * sizeof *nr); /* the part copied now */
     if (!nr) return 0;
     size_t w = 0;
     for (size_t v = 0; v < S->nv; v++) {
@@ -2298,8 +2298,10 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     S->nt = nt;
     S->nt_in = nt_in;
     S->live = nt;
-#define ALLOC(p, n) (((p) = fl_alloc((n), sizeof *(p))) != NULL)
-#define CALLOC(p, n) (((p) = fl_calloc((n), sizeof *(p))) != NULL)
+    /* every array mapped at once (fl_populate: on the VMs measured, 90,000
+     * first-touch faults took 0.9-1.3 s of this set-up on cover x4) */
+#define ALLOC(p, n) (((p) = fl_populate(fl_alloc((n), sizeof *(p)), (n) * sizeof *(p))) != NULL)
+#define CALLOC(p, n) (((p) = fl_populate(fl_calloc((n), sizeof *(p)), (n) * sizeof *(p))) != NULL)
     if (!ALLOC(S->pos, 3 * nv) || !CALLOC(S->q, nv) || !ALLOC(S->node, nv) || !ALLOC(S->fstart, nv + 1) ||
         !CALLOC(S->fcount, nv) || !CALLOC(S->val, nv) || !CALLOC(S->vflag, nv) || !CALLOC(S->fdeg, nv) ||
         !CALLOC(S->vmark, nv) || !(S->face = alloc_lines(nt, sizeof *S->face)) || !ALLOC(S->tedge, 3 * nt) ||
@@ -3463,8 +3465,8 @@ static size_t band_par_pass(simp *S, par_ctx *X, double tau, size_t floor_live, 
  * which starts at FEMLOD_SIMPLIFY_BAND times the best key and drops
  * by that factor per pass. Returns 0 on ENOMEM, 2 cancelled, 1 otherwise. */
 static int band_run(simp *S, const femlod_simplify_options *o, size_t floor_live, size_t live0, size_t *next) {
-    S->vlock = fl_calloc(S->nv, sizeof *S->vlock);
-    S->vbest = fl_alloc(S->nv, sizeof *S->vbest);
+    S->vlock = fl_populate(fl_calloc(S->nv, sizeof *S->vlock), S->nv * sizeof *S->vlock);
+    S->vbest = fl_populate(fl_alloc(S->nv, sizeof *S->vbest), S->nv * sizeof *S->vbest);
     if (!S->vlock || !S->vbest) return 0;
     par_ctx X;
     memset(&X, 0, sizeof X);
