@@ -314,7 +314,7 @@ _Static_assert(sizeof(fl_grid_block) == 64, "a grid block is one cache line");
 static int blocks_resize(fl_grid *g, size_t n) {
     if (n == 0 || n > SIZE_MAX / sizeof(fl_grid_block) - 1) return 0;
     size_t old = g->blocks ? (size_t)((char *)g->blocks - (char *)g->blocks_mem) : 0;
-    char *m = fl_populate(fl_realloc(g->blocks_mem, n + 1, sizeof(fl_grid_block)), (n + 1) * sizeof(fl_grid_block));
+    char *m = fl_realloc(g->blocks_mem, n + 1, sizeof(fl_grid_block));
     if (!m) return 0;
     size_t off = (size_t)(-(uintptr_t)m & 63u);
     if (g->blocks && off != old) memmove(m + off, m + old, g->nblocks * sizeof(fl_grid_block));
@@ -370,6 +370,8 @@ void fl_grid_range(const fl_grid *g, const double lo[3], const double hi[3], int
     }
 }
 
+#define FL_GRID_MAP_AHEAD 16384 /* blocks: 1 MiB */
+
 static uint32_t new_block(fl_grid *g) {
     if (g->free_block != UINT32_MAX) {
         uint32_t b = g->free_block;
@@ -383,6 +385,14 @@ static uint32_t new_block(fl_grid *g) {
         if (cap >= UINT32_MAX) return UINT32_MAX;
         if (!blocks_resize(g, cap)) return UINT32_MAX;
         g->capblocks = cap;
+    }
+    /* the pool's pages are mapped a mebibyte ahead of use (fl_populate:
+     * its capacity is a guess, often well above what is used) */
+    if (g->nblocks == g->mapped) {
+        size_t n = FL_GRID_MAP_AHEAD;
+        if (n > g->capblocks - g->nblocks) n = g->capblocks - g->nblocks;
+        fl_populate(g->blocks + g->nblocks, n * sizeof(fl_grid_block));
+        g->mapped = g->nblocks + n;
     }
     return (uint32_t)g->nblocks++;
 }

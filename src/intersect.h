@@ -68,6 +68,7 @@ typedef struct fl_grid {
     fl_grid_block *blocks; /* in blocks_mem, aligned to 64 bytes */
     void *blocks_mem;
     size_t nblocks, capblocks;
+    size_t mapped; /* blocks below this index are mapped (new_block) */
     uint32_t free_block;
     size_t nfree;  /* blocks on the free list */
     int fixed;     /* 1: the free list only, never a new block (a worker's view, simplify.c) */

@@ -2374,7 +2374,9 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     }
     S->fstart[nv] = (uint32_t)acc;
     S->caprefs = acc + acc / 2 + 1024;
-    if (!ALLOC(S->refs, S->caprefs)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    /* the lists are mapped, their spare room faults when used */
+    if (!(S->refs = fl_populate(fl_alloc(S->caprefs, sizeof *S->refs), acc * sizeof *S->refs)))
+        return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     S->nrefs = acc;
     memset(S->fcount, 0, nv * sizeof *S->fcount);
     for (size_t f = 0; f < nt; f++)
@@ -2422,7 +2424,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     double elen = 0.0;
     for (size_t e = 0; e < ne; e++) elen += sqrt(dist2(P(S, S->ev[2 * e]), P(S, S->ev[2 * e + 1])));
     S->ne = ne;
-    if (!(S->edge = alloc_lines(ne + 1, sizeof *S->edge)) || !CALLOC(S->emark, ne + 1) || !ALLOC(S->eopt, 3 * ne + 3) ||
+    if (!(S->edge = alloc_lines(ne + 1, sizeof *S->edge)) || !(S->emark = fl_calloc(ne + 1, sizeof *S->emark)) /* seldom used: not mapped */ || !ALLOC(S->eopt, 3 * ne + 3) ||
         (FEMLOD_SIMPLIFY_BOUND && !ALLOC(S->ehint, 2 * ne + 2)))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     if (FEMLOD_SIMPLIFY_BOUND) memset(S->ehint, 0xff, (2 * ne + 2) * sizeof *S->ehint);
