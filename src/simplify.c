@@ -2004,8 +2004,10 @@ static void morton_keys(void *arg, size_t v0, size_t v1, int part) {
  * the same everywhere is skipped), from index order. Returns the inverse
  * (input -> slot), NULL on ENOMEM. */
 static uint32_t *morton_slots(const double *pos, size_t nv, uint32_t *perm, int nth) {
-    mkey *k = fl_alloc(nv, sizeof *k), *k2 = fl_alloc(nv, sizeof *k2);
-    uint32_t *inv = fl_alloc(nv, sizeof *inv);
+    /* all written whole: mapped at once (fl_populate) */
+    mkey *k = fl_populate(fl_alloc(nv, sizeof *k), nv * sizeof *k);
+    mkey *k2 = fl_populate(fl_alloc(nv, sizeof *k2), nv * sizeof *k2);
+    uint32_t *inv = fl_populate(fl_alloc(nv, sizeof *inv), nv * sizeof *inv);
     if (!k || !k2 || !inv) {
         free(k);
         free(k2);
@@ -2337,8 +2339,9 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
      * remembers each face's input index for the output order. */
     if (!ALLOC(S->fin, nt)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     {
-        uint32_t *cnt = fl_calloc(nv + 1, sizeof *cnt), *tmp = fl_alloc(3 * nt, sizeof *tmp);
-        uint32_t *fin0 = fl_alloc(nt, sizeof *fin0);
+        uint32_t *cnt = fl_populate(fl_calloc(nv + 1, sizeof *cnt), (nv + 1) * sizeof *cnt);
+        uint32_t *tmp = fl_populate(fl_alloc(3 * nt, sizeof *tmp), 3 * nt * sizeof *tmp);
+        uint32_t *fin0 = fl_populate(fl_alloc(nt, sizeof *fin0), nt * sizeof *fin0);
         if (!cnt || !tmp || !fin0) {
             free(cnt);
             free(tmp);
@@ -3649,7 +3652,7 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
 }
 
 static femlod_status make_output(simp *S, femlod_mesh **out, femlod_collapse_log *log) {
-    uint32_t *map = fl_alloc(S->nv, sizeof *map);
+    uint32_t *map = fl_populate(fl_alloc(S->nv, sizeof *map), S->nv * sizeof *map);
     if (!map) return FEMLOD_ENOMEM;
     /* output vertices in increasing node id: surviving input vertices in
      * input order, then the new ones in collapse order */
@@ -3678,7 +3681,7 @@ static femlod_status make_output(simp *S, femlod_mesh **out, femlod_collapse_log
     for (size_t v = 0; v < S->nv; v++)
         if (map[v] != UINT32_MAX) memcpy(m->pos + 3 * (size_t)map[v], S->pos + 3 * v, 3 * sizeof(double));
     /* triangles in the order of the input triangles they descend from */
-    uint32_t *byin = fl_alloc(S->nt_in, sizeof *byin);
+    uint32_t *byin = fl_populate(fl_alloc(S->nt_in, sizeof *byin), S->nt_in * sizeof *byin);
     if (!byin) {
         free(map);
         femlod_mesh_free(m);
