@@ -2427,7 +2427,11 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     double elen = 0.0;
     for (size_t e = 0; e < ne; e++) elen += sqrt(dist2(P(S, S->ev[2 * e]), P(S, S->ev[2 * e + 1])));
     S->ne = ne;
-    if (!(S->edge = alloc_lines(ne + 1, sizeof *S->edge)) || !(S->emark = fl_calloc(ne + 1, sizeof *S->emark)) /* seldom used: not mapped */ || !ALLOC(S->eopt, 3 * ne + 3) ||
+    /* the edge marks are written by the exact queue's ring listing and the
+     * marked scans only, after fast passes on a small part of the edges:
+     * not mapped */
+    if (!(S->edge = alloc_lines(ne + 1, sizeof *S->edge)) || !(S->emark = fl_calloc(ne + 1, sizeof *S->emark)) ||
+        !ALLOC(S->eopt, 3 * ne + 3) ||
         (FEMLOD_SIMPLIFY_BOUND && !ALLOC(S->ehint, 2 * ne + 2)))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     if (FEMLOD_SIMPLIFY_BOUND) memset(S->ehint, 0xff, (2 * ne + 2) * sizeof *S->ehint);
