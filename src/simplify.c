@@ -2403,7 +2403,9 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
         size_t hi = par_part_lo(nv, E.parts, t + 1);
         for (size_t a = par_part_lo(nv, E.parts, t); a < hi; a++) cap_e += 2 * (size_t)S->fcount[a];
     }
-    if (!ALLOC(S->ev, 2 * cap_e + 2) || !ALLOC(S->enf, cap_e + 1))
+    /* sized for the worst case (two sides per face corner: four times the
+     * edges of a closed mesh) and written in part: not mapped */
+    if (!(S->ev = fl_alloc(2 * cap_e + 2, sizeof *S->ev)) || !(S->enf = fl_alloc(cap_e + 1, sizeof *S->enf)))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     par_ranges(nth, nv, edge_part, &E);
     size_t ne = 0;
