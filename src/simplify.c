@@ -88,6 +88,12 @@
 #ifndef FEMLOD_SIMPLIFY_CERTIFY
 #define FEMLOD_SIMPLIFY_CERTIFY 1 /* star certificates in the intersection test */
 #endif
+#ifndef FEMLOD_SIMPLIFY_PLANE_RULE
+#define FEMLOD_SIMPLIFY_PLANE_RULE 1 /* intersection test: the plane rule (docs/design.md) */
+#endif
+#ifndef FEMLOD_SIMPLIFY_PLANE_VERIFY
+#define FEMLOD_SIMPLIFY_PLANE_VERIFY 0 /* 1: run the full test too and report disagreements */
+#endif
 #ifndef FEMLOD_SIMPLIFY_BOUND
 #define FEMLOD_SIMPLIFY_BOUND 0 /* 1: exact lazy re-evaluation with upper bounds (docs/simplify.md: fewer evaluations, more time) */
 #endif
@@ -182,6 +188,7 @@ typedef struct ring {
 
 typedef struct simp_stats {
     size_t evals, settles, bounds, rings, cands, cand_ok, solves, pops, links, expensive, cells, items, tritri, skipped;
+    size_t planar;
     size_t deferred;
     size_t attempts, attempt_low, attempt_fresh;
     double t[6]; /* seconds: setup, pre-phase, first evaluation of the passes, passes, queue, output */
@@ -263,6 +270,7 @@ typedef struct simp {
     float *fsz;  /* longest edge */
     float *cone; /* axis xyz, half-angle (radians) */
     uint32_t *fmark; /* set-up only: the pinched-vertex flood (with vertex stamps) */
+    uint8_t *fmade; /* 1: made by a collapse, not read from the input (plane_rule) */
     uint32_t *fpt; /* deviation: first removed input vertex assigned to the face */
     uint32_t *pnext;
 
@@ -1113,6 +1121,63 @@ static inline uint32_t slab_of(const simp *S, const double *p) {
     return slab_of_cell(S, fl_grid_coord(&S->grid, p[S->slab_ax], S->slab_ax));
 }
 
+/* n x m along axis ax (the ax component of the cross product) is clearly
+ * nonzero: its sine above 1e-6 in magnitude. Returns its sign, 0 if not. */
+static inline int plane_turn(const double *a, const double *b, const double *c, int ax) {
+    int u = (ax + 1) % 3, w = (ax + 2) % 3;
+    double n0 = b[u] - a[u], n1 = b[w] - a[w], m0 = c[u] - a[u], m1 = c[w] - a[w];
+    double o = n0 * m1 - n1 * m0;
+    if (!(o * o > 1e-12 * (n0 * n0 + n1 * n1) * (m0 * m0 + m1 * m1))) return 0;
+    return o > 0.0 ? 1 : -1;
+}
+
+/* The plane rule (docs/design.md "The intersection test's plane rule"):
+ * with k's new star certified (the caller), a collapse whose star and p lie
+ * in one axis plane exactly, whose replaced faces were all made by
+ * collapses and turn the same way as the new triangles, creates no
+ * intersection: the new triangles cover the same region as the old. */
+static int plane_rule(const simp *S, const ring *R, const double p[3]) {
+    const double *pi = P(S, R->i), *pj = P(S, R->j);
+    int ax = -1;
+    for (int k = 0; k < 3 && ax < 0; k++) {
+        if (pi[k] != p[k] || pj[k] != p[k]) continue;
+        int same = 1;
+        for (size_t r = 0; r < R->n && same; r++) same = P(S, R->a[r])[k] == p[k] && P(S, R->b[r])[k] == p[k];
+        if (same) ax = k;
+    }
+    if (ax < 0) return 0;
+    for (size_t r = 0; r < R->n; r++)
+        if (!S->fmade[R->face[r]]) return 0;
+    for (size_t s = 0; s < R->ns; s++)
+        if (!S->fmade[R->sface[s]]) return 0;
+    int sg = 0;
+    for (size_t r = 0; r < R->n; r++) {
+        const double *a = P(S, R->a[r]), *b = P(S, R->b[r]);
+        int tn = plane_turn(p, a, b, ax), to = plane_turn(R->from_j[r] ? pj : pi, a, b, ax);
+        if (r == 0) sg = tn;
+        if (tn == 0 || tn != sg || to != sg) return 0;
+    }
+    for (size_t s = 0; s < R->ns; s++) {
+        const uint32_t *t = S->face[R->sface[s]].v;
+        if (plane_turn(P(S, t[0]), P(S, t[1]), P(S, t[2]), ax) != sg) return 0;
+    }
+    return sg != 0;
+}
+
+/* The full test found a crossing. A build with FEMLOD_SIMPLIFY_PLANE_VERIFY=1
+ * runs it after the plane rule accepted too, and reports any disagreement
+ * (test c_plane_verify); the rule's answer stands. */
+static int plane_disagrees(simp *S, const ring *R, const double p[3], int planar, uint32_t f,
+                           const double *const T[3], const double *const Q[3], const uint32_t *qid) {
+    if (!planar) return FEMLOD_REJECT_INTERSECTION;
+    (void)S;
+    fprintf(stderr, "plane rule: edge %u (%u, %u) to (%.17g, %.17g, %.17g) accepted, full test: face %u\n", R->e, R->i,
+            R->j, p[0], p[1], p[2], f);
+    for (int c = 0; c < 3; c++) fprintf(stderr, "  T %.17g %.17g %.17g\n", T[c][0], T[c][1], T[c][2]);
+    for (int c = 0; c < 3; c++) fprintf(stderr, "  Q %u %.17g %.17g %.17g\n", qid[c], Q[c][0], Q[c][1], Q[c][2]);
+    return NO_REASON;
+}
+
 /* No new triangle may cross another triangle of the mesh (issue 3): each new
  * triangle is tested against the triangles whose grid cells its box
  * overlaps, the triangles being replaced excepted, and against the other new
@@ -1157,7 +1222,8 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
     /* star certificates: k's now; a ring vertex's (interior, manifold)
      * only when a triangle at it meets a new triangle's box (link_cert):
      * on cover x4, 7.2 of the about 10 ring vertices per check */
-    int kcert = 0;
+    int kcert = 0, planar = 0;
+    (void)planar;
     if (!buf_reserve((void **)&S->sc.cert, &S->sc.cert_cap, 2 * R->n + 2, 1)) {
         S->oom = 1;
         return FEMLOD_REJECT_INTERSECTION;
@@ -1172,13 +1238,18 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
             W[r] = P(S, R->b[r]);
         }
         kcert = star_embedded(p, U, W, R->n);
+        if (kcert && FEMLOD_SIMPLIFY_PLANE_RULE && S->oriented && plane_rule(S, R, p)) {
+            STAT(planar);
+            if (!FEMLOD_SIMPLIFY_PLANE_VERIFY) return NO_REASON;
+            planar = 1;
+        }
     }
     /* one pass over the cells under the fan; each triangle met once */
     int c0[3], c1[3];
     fl_grid_range(&S->grid, lo, hi, c0, c1);
     /* a fast-pass worker reads cells of its slab and the two next to it
      * only: no other worker writes those (band_par) */
-    if (S->par && (slab_of_cell(S, c0[S->slab_ax]) + 1 < S->slab || slab_of_cell(S, c1[S->slab_ax]) > S->slab + 1))
+    if (S->par && !planar && (slab_of_cell(S, c0[S->slab_ax]) + 1 < S->slab || slab_of_cell(S, c1[S->slab_ax]) > S->slab + 1))
         return DEFER_REASON;
     for (int z = c0[2]; z <= c1[2]; z++)
         for (int y = c0[1]; y <= c1[1]; y++)
@@ -1237,7 +1308,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                                 uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
                                 STAT(tritri);
                                 if (fl_tri_tri_intersect_p(T, tid, S->sc.tplane + r, Q, t, S->eps))
-                                    return FEMLOD_REJECT_INTERSECTION;
+                                    return plane_disagrees(S, R, p, planar, f, T, Q, t);
                             }
                         }
                     }
@@ -1257,7 +1328,8 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                 continue;
             const double *Q[3] = {p, P(S, R->a[s2]), P(S, R->b[s2])};
             uint32_t qid[3] = {K_ID, R->a[s2], R->b[s2]};
-            if (fl_tri_tri_intersect_p(T, tid, S->sc.tplane + r, Q, qid, S->eps)) return FEMLOD_REJECT_INTERSECTION;
+            if (fl_tri_tri_intersect_p(T, tid, S->sc.tplane + r, Q, qid, S->eps))
+                return plane_disagrees(S, R, p, planar, UINT32_MAX, T, Q, qid);
         }
     }
     return NO_REASON;
@@ -1510,6 +1582,7 @@ static int collapse(simp *S, ring *R, int c) {
     for (size_t r = 0; r < R->n; r++) {
         uint32_t f = R->face[r];
         face_update_cache(S, f);
+        S->fmade[f] = 1;
         if (S->cone_on) memcpy(S->cone + 4 * (size_t)f, S->sc.newcone + 4 * r, 4 * sizeof(float));
         if (!grid_add_face(S, f)) return 0;
     }
@@ -1826,6 +1899,7 @@ static void simp_free(simp *S) {
     free(S->fsz);
     free(S->cone);
     free(S->fmark);
+    free(S->fmade);
     free(S->fpt);
     free(S->pnext);
     free(S->ev);
@@ -2307,7 +2381,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     if (!ALLOC(S->pos, 3 * nv) || !CALLOC(S->q, nv) || !ALLOC(S->node, nv) || !ALLOC(S->fstart, nv + 1) ||
         !CALLOC(S->fcount, nv) || !CALLOC(S->val, nv) || !CALLOC(S->vflag, nv) || !CALLOC(S->fdeg, nv) ||
         !CALLOC(S->vmark, nv) || !(S->face = alloc_lines(nt, sizeof *S->face)) || !ALLOC(S->tedge, 3 * nt) ||
-        !ALLOC(S->fsz, nt) || !CALLOC(S->fmark, nt))
+        !ALLOC(S->fsz, nt) || !CALLOC(S->fmark, nt) || !CALLOC(S->fmade, nt))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory (%zu triangles)", nt_in);
     /* Vertex slots in Morton order of position: the neighbours of a vertex
      * then sit near it in memory, which halves the time on large meshes
@@ -3811,11 +3885,11 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
         double n = S->collapses ? (double)S->collapses : 1.0;
         fprintf(stderr,
                 "simplify stats per collapse (%zu): bounds %.2f evals %.2f (settle %.2f, prefix fail %.2f) cands %.2f (ok %.2f) "
-                "solves %.2f pops %.2f links %.2f expensive %.2f cells %.1f items %.1f tritri %.1f skipped %.2f deferred %.2f\n",
+                "solves %.2f pops %.2f links %.2f expensive %.2f cells %.1f items %.1f tritri %.1f skipped %.2f deferred %.2f planar %.2f\n",
                 S->collapses, (double)c->bounds / n, (double)c->evals / n, (double)c->settles / n, (double)(c->evals + c->bounds - c->rings) / n,
                 (double)c->cands / n, (double)c->cand_ok / n, (double)c->solves / n, (double)c->pops / n,
                 (double)c->links / n, (double)c->expensive / n, (double)c->cells / n, (double)c->items / n,
-                (double)c->tritri / n, (double)c->skipped / n, (double)c->deferred / n);
+                (double)c->tritri / n, (double)c->skipped / n, (double)c->deferred / n, (double)c->planar / n);
     }
 #endif
     if (result) {

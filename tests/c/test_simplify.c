@@ -103,11 +103,53 @@ static int pair_intersects(const femlod_mesh *m, size_t f, size_t g) {
     return 0;
 }
 
+/* A triangle as its corners' positions from the least corner on, in its
+ * turning order: the same key for the same triangle of two meshes. */
+typedef struct tri_key {
+    double x[9];
+} tri_key;
+
+static tri_key key_of(const femlod_mesh *m, size_t f) {
+    tri_key k;
+    const double *c[3];
+    for (int i = 0; i < 3; i++) c[i] = m->pos + 3 * (size_t)m->tri[3 * f + i];
+    int s = 0;
+    for (int i = 1; i < 3; i++)
+        if (c[i][0] < c[s][0] || (c[i][0] == c[s][0] && (c[i][1] < c[s][1] || (c[i][1] == c[s][1] && c[i][2] < c[s][2]))))
+            s = i;
+    for (int i = 0; i < 3; i++) memcpy(k.x + 3 * i, c[(s + i) % 3], 3 * sizeof(double));
+    return k;
+}
+
+static int key_cmp(const void *a, const void *b) {
+    const double *x = ((const tri_key *)a)->x, *y = ((const tri_key *)b)->x;
+    for (int i = 0; i < 9; i++)
+        if (x[i] != y[i]) return x[i] < y[i] ? -1 : 1;
+    return 0;
+}
+
+/* Per triangle of out: 1 if the same triangle (same corners' positions, same
+ * turn) is in `in`, i.e. no collapse made it. */
+static unsigned char *input_triangles(const femlod_mesh *in, const femlod_mesh *out) {
+    tri_key *keys = malloc((in->nt + 1) * sizeof *keys);
+    unsigned char *is = calloc(out->nt + 1, 1);
+    for (size_t f = 0; f < in->nt; f++) keys[f] = key_of(in, f);
+    qsort(keys, in->nt, sizeof *keys, key_cmp);
+    for (size_t f = 0; f < out->nt; f++) {
+        tri_key k = key_of(out, f);
+        is[f] = bsearch(&k, keys, in->nt, sizeof *keys, key_cmp) != NULL;
+    }
+    free(keys);
+    return is;
+}
+
 /* Pairs of triangles that cross: every pair whose boxes overlap, found
- * through a uniform grid of the boxes. */
-static size_t count_intersections(const femlod_mesh *m) {
+ * through a uniform grid of the boxes; with `in`, only the pairs of which
+ * at least one triangle is not one of in's (made by a collapse). */
+static size_t count_crossings(const femlod_mesh *m, const femlod_mesh *in) {
     size_t nt = m->nt;
     if (nt == 0) return 0;
+    unsigned char *old = in ? input_triangles(in, m) : NULL;
     double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300}, maxext = 0;
     double *box = malloc(6 * nt * sizeof *box);
     for (size_t f = 0; f < nt; f++) {
@@ -162,6 +204,7 @@ static size_t count_intersections(const femlod_mesh *m) {
                         if (bg[0] > bf[3] || bg[1] > bf[4] || bg[2] > bf[5] || bg[3] < bf[0] ||
                             bg[4] < bf[1] || bg[5] < bf[2])
                             continue;
+                        if (old && old[f] && old[g]) continue;
                         if (pair_intersects(m, f, g)) hits++;
                     }
                 }
@@ -171,8 +214,11 @@ static size_t count_intersections(const femlod_mesh *m) {
     free(cellof);
     free(items);
     free(fill);
+    free(old);
     return hits;
 }
+
+static size_t count_intersections(const femlod_mesh *m) { return count_crossings(m, NULL); }
 
 /* }====== */
 
@@ -382,9 +428,10 @@ static int simplify_checked(run *r, const femlod_mesh *in, const femlod_simplify
         CHECK(folds <= folds_in);
     }
     if (inter) { /* a defective input may cross itself already: no more than it did */
-        size_t inter_in = count_intersections(in);
-        printf("  input crossings %zu, output %zu\n", inter_in, inter);
+        size_t inter_in = count_intersections(in), made = count_crossings(r->out, in);
+        printf("  input crossings %zu, output %zu, with a triangle a collapse made %zu\n", inter_in, inter, made);
         CHECK(inter <= inter_in);
+        CHECK(made == 0); /* only input triangles still crossing each other */
     }
     if (s->target && s->stop_reason == FEMLOD_STOP_TARGET) CHECK(r->out->nt <= s->target);
     CHECK(log_replays(in, r->out, r->log));
@@ -877,6 +924,65 @@ static void test_defective(void) {
     }
 }
 
+/* A defective input made to test the plane rule's fourth condition
+ * (docs/design.md "The intersection test's plane rule"): a cube whose
+ * faces are flat grids of midpoint subdivision (so the rule's other
+ * conditions hold all over them), and a thin tetrahedron piercing its top
+ * face. Collapses near the piercing replace input triangles that cross the
+ * tetrahedron; a rule that trusted input triangles would let the new ones
+ * inherit the crossing. The check: every crossing left is between two
+ * input triangles, in the exact order and in fast passes. */
+static void test_plane_rule_pierced(void) {
+    static const double cp[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                    {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+    static const uint32_t ct[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                                       {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+    femlod_mesh *cube = NULL, *fine = NULL, *m = NULL;
+    femlod_error err;
+    CHECK(femlod_mesh_create(&cube, &cp[0][0], 8, &ct[0][0], 12, &err) == FEMLOD_OK);
+    CHECK(femlod_mesh_subdivide(&fine, cube, 5, &err) == FEMLOD_OK);
+    if (!fine) {
+        femlod_mesh_free(cube);
+        return;
+    }
+    size_t nv = fine->nv, nt = fine->nt;
+    double *pos = malloc(3 * (nv + 4) * sizeof *pos);
+    uint32_t *tri = malloc(3 * (nt + 4) * sizeof *tri);
+    memcpy(pos, fine->pos, 3 * nv * sizeof *pos);
+    memcpy(tri, fine->tri, 3 * nt * sizeof *tri);
+    /* the tetrahedron: a thin base below the top face, its apex above */
+    static const double tp[4][3] = {{0.431, 0.467, 0.93}, {0.577, 0.452, 0.93}, {0.503, 0.581, 0.93}, {0.507, 0.499, 1.07}};
+    static const uint32_t tt[4][3] = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {2, 0, 3}};
+    memcpy(pos + 3 * nv, tp, sizeof tp);
+    for (int f = 0; f < 4; f++)
+        for (int c = 0; c < 3; c++) tri[3 * (nt + f) + c] = (uint32_t)nv + tt[f][c];
+    CHECK(femlod_mesh_create(&m, pos, nv + 4, tri, nt + 4, &err) == FEMLOD_OK);
+    free(pos);
+    free(tri);
+    if (m) {
+        size_t in_cross = count_intersections(m);
+        printf("pierced cube: %zu triangles, %zu crossing pairs\n", m->nt, in_cross);
+        CHECK(in_cross > 0);
+        for (int fast = 0; fast < 2; fast++) {
+            femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+            o.target = 400;
+            o.max_size = 0.5;
+            o.fast_above = fast ? 2.0 : 0.0;
+            o.threads = 2;
+            run r;
+            if (simplify_checked(&r, m, &o, fast ? "pierced cube, fast" : "pierced cube, exact")) {
+                size_t out_cross = count_intersections(r.out), made = count_crossings(r.out, m);
+                printf("  crossings %zu, with a made triangle %zu\n", out_cross, made);
+                CHECK(out_cross > 0 && made == 0);
+            }
+            run_free(&r);
+        }
+    }
+    femlod_mesh_free(m);
+    femlod_mesh_free(fine);
+    femlod_mesh_free(cube);
+}
+
 static int cancel_at(void *payload, double done) {
     (void)done;
     return ++*(int *)payload >= 3;
@@ -1238,6 +1344,7 @@ int main(void) {
     test_max_deviation();
     test_lock();
     test_defective();
+    test_plane_rule_pierced();
     test_cover();
     test_bunny();
     return check_report("simplify");
