@@ -412,25 +412,60 @@ int fl_grid_take(fl_grid *g, size_t n, uint32_t *head) {
     return 1;
 }
 
+/* Adds item to cell (x, y, z) of a box whose first cell is c0. */
+static int cell_insert(fl_grid *g, uint32_t item, int x, int y, int z, const int c0[3]) {
+    size_t c = fl_grid_cell(g, x, y, z);
+    uint32_t fill = g->cell[c].count % FL_GRID_BLOCK;
+    if (fill == 0) { /* head full or absent */
+        uint32_t b = new_block(g);
+        if (b == UINT32_MAX) return 0;
+        g->blocks[b].next = g->cell[c].head;
+        g->cell[c].head = b;
+    }
+    fl_grid_block *B = g->blocks + g->cell[c].head;
+    B->item[fill] = item;
+    B->first[fill] = (uint8_t)((x == c0[0]) | ((y == c0[1]) << 1) | ((z == c0[2]) << 2));
+    g->cell[c].count++;
+    return 1;
+}
+
+/* Takes item out of cell (x, y, z): the head's last entry fills its place. */
+static void cell_remove(fl_grid *g, uint32_t item, int x, int y, int z) {
+    size_t c = fl_grid_cell(g, x, y, z);
+    uint32_t n = g->cell[c].count;
+    if (n == 0) return;
+    uint32_t hb = g->cell[c].head, last = (n - 1) % FL_GRID_BLOCK;
+    /* find the item: the head holds last+1 items, the rest full blocks */
+    uint32_t b = hb, lim = last + 1;
+    int found = 0;
+    while (b != UINT32_MAX && !found) {
+        for (uint32_t s = 0; s < lim; s++)
+            if (g->blocks[b].item[s] == item) {
+                g->blocks[b].item[s] = g->blocks[hb].item[last];
+                g->blocks[b].first[s] = g->blocks[hb].first[last];
+                found = 1;
+                break;
+            }
+        b = g->blocks[b].next;
+        lim = FL_GRID_BLOCK;
+    }
+    if (!found) return;
+    g->cell[c].count = n - 1;
+    if (last == 0) {
+        g->cell[c].head = g->blocks[hb].next;
+        g->blocks[hb].next = g->free_block;
+        g->free_block = hb;
+        g->nfree++;
+    }
+}
+
 int fl_grid_insert(fl_grid *g, uint32_t item, const double lo[3], const double hi[3]) {
     int c0[3], c1[3];
     fl_grid_range(g, lo, hi, c0, c1);
     for (int z = c0[2]; z <= c1[2]; z++)
         for (int y = c0[1]; y <= c1[1]; y++)
-            for (int x = c0[0]; x <= c1[0]; x++) {
-                size_t c = fl_grid_cell(g, x, y, z);
-                uint32_t fill = g->cell[c].count % FL_GRID_BLOCK;
-                if (fill == 0) { /* head full or absent */
-                    uint32_t b = new_block(g);
-                    if (b == UINT32_MAX) return 0;
-                    g->blocks[b].next = g->cell[c].head;
-                    g->cell[c].head = b;
-                }
-                fl_grid_block *B = g->blocks + g->cell[c].head;
-                B->item[fill] = item;
-                B->first[fill] = (uint8_t)((x == c0[0]) | ((y == c0[1]) << 1) | ((z == c0[2]) << 2));
-                g->cell[c].count++;
-            }
+            for (int x = c0[0]; x <= c1[0]; x++)
+                if (!cell_insert(g, item, x, y, z, c0)) return 0;
     return 1;
 }
 
@@ -439,34 +474,35 @@ void fl_grid_remove(fl_grid *g, uint32_t item, const double lo[3], const double 
     fl_grid_range(g, lo, hi, c0, c1);
     for (int z = c0[2]; z <= c1[2]; z++)
         for (int y = c0[1]; y <= c1[1]; y++)
-            for (int x = c0[0]; x <= c1[0]; x++) {
-                size_t c = fl_grid_cell(g, x, y, z);
-                uint32_t n = g->cell[c].count;
-                if (n == 0) continue;
-                uint32_t hb = g->cell[c].head, last = (n - 1) % FL_GRID_BLOCK;
-                /* find the item: the head holds last+1 items, the rest full blocks */
-                uint32_t b = hb, lim = last + 1;
-                int found = 0;
-                while (b != UINT32_MAX && !found) {
-                    for (uint32_t s = 0; s < lim; s++)
-                        if (g->blocks[b].item[s] == item) {
-                            g->blocks[b].item[s] = g->blocks[hb].item[last];
-                            g->blocks[b].first[s] = g->blocks[hb].first[last];
-                            found = 1;
-                            break;
-                        }
-                    b = g->blocks[b].next;
-                    lim = FL_GRID_BLOCK;
-                }
-                if (!found) continue;
-                g->cell[c].count = n - 1;
-                if (last == 0) {
-                    g->cell[c].head = g->blocks[hb].next;
-                    g->blocks[hb].next = g->free_block;
-                    g->free_block = hb;
-                    g->nfree++;
-                }
-            }
+            for (int x = c0[0]; x <= c1[0]; x++) cell_remove(g, item, x, y, z);
+}
+
+static inline int in_range(int x, int y, int z, const int c0[3], const int c1[3]) {
+    return x >= c0[0] && x <= c1[0] && y >= c0[1] && y <= c1[1] && z >= c0[2] && z <= c1[2];
+}
+
+/* When the first cell stays, the entries of the cells both boxes cover are
+ * already right (their first-cell bits depend on the first cell only):
+ * only the cells of one box alone change. */
+int fl_grid_move(fl_grid *g, uint32_t item, const double olo[3], const double ohi[3], const double nlo[3],
+                 const double nhi[3]) {
+    int a0[3], a1[3], b0[3], b1[3];
+    fl_grid_range(g, olo, ohi, a0, a1);
+    fl_grid_range(g, nlo, nhi, b0, b1);
+    if (a0[0] != b0[0] || a0[1] != b0[1] || a0[2] != b0[2]) {
+        fl_grid_remove(g, item, olo, ohi);
+        return fl_grid_insert(g, item, nlo, nhi);
+    }
+    if (a1[0] == b1[0] && a1[1] == b1[1] && a1[2] == b1[2]) return 1;
+    for (int z = a0[2]; z <= a1[2]; z++)
+        for (int y = a0[1]; y <= a1[1]; y++)
+            for (int x = a0[0]; x <= a1[0]; x++)
+                if (!in_range(x, y, z, b0, b1)) cell_remove(g, item, x, y, z);
+    for (int z = b0[2]; z <= b1[2]; z++)
+        for (int y = b0[1]; y <= b1[1]; y++)
+            for (int x = b0[0]; x <= b1[0]; x++)
+                if (!in_range(x, y, z, a0, a1) && !cell_insert(g, item, x, y, z, b0)) return 0;
+    return 1;
 }
 
 /* }====== */

@@ -208,6 +208,8 @@ typedef struct scratch {
     size_t pbuf_cap, pdst_cap;
     double *tbox; /* per ring face: box of the new triangle */
     size_t tbox_cap;
+    double *obox; /* per ring face: its box before the collapse (collapse) */
+    size_t obox_cap;
     fl_tri_plane *tplane; /* per ring face: plane of the new triangle */
     size_t tplane_cap;
     uint8_t *cert; /* per ring face: star certificates of a and b (intersect_check) */
@@ -1506,7 +1508,9 @@ static int collapse(simp *S, ring *R, int c) {
 
     /* out of the grid while the old positions hold */
     for (size_t s = 0; s < R->ns; s++) grid_remove_face(S, R->sface[s]);
-    for (size_t r = 0; r < R->n; r++) grid_remove_face(S, R->face[r]);
+    /* the ring faces stay in the grid: moved to their new boxes below */
+    if (!buf_reserve((void **)&S->sc.obox, &S->sc.obox_cap, 6 * R->n + 6, sizeof *S->sc.obox)) return 0;
+    for (size_t r = 0; r < R->n; r++) face_bbox(S, R->face[r], S->sc.obox + 6 * r, S->sc.obox + 6 * r + 3);
 
     if (S->dev_on) {
         for (size_t s = 0; s < R->ns; s++) S->fpt[R->sface[s]] = UINT32_MAX;
@@ -1584,7 +1588,9 @@ static int collapse(simp *S, ring *R, int c) {
         face_update_cache(S, f);
         S->fmade[f] = 1;
         if (S->cone_on) memcpy(S->cone + 4 * (size_t)f, S->sc.newcone + 4 * r, 4 * sizeof(float));
-        if (!grid_add_face(S, f)) return 0;
+        double lo[3], hi[3];
+        face_bbox(S, f, lo, hi);
+        if (!fl_grid_move(&S->grid, f, S->sc.obox + 6 * r, S->sc.obox + 6 * r + 3, lo, hi)) return 0;
     }
     S->collapses++;
     if (S->phase == 0) S->prephase++;
@@ -1840,6 +1846,7 @@ static void simp_free_scratch(simp *S) {
     free(S->sc.pdst);
     free(S->sc.newcone);
     free(S->sc.tbox);
+    free(S->sc.obox);
     free(S->sc.tplane);
     free(S->sc.cert);
 }

@@ -1111,6 +1111,31 @@ static void test_grid(void) {
         fl_grid_remove(&g, (uint32_t)i, box[i], box[i] + 3);
         alive[i] = 0;
     }
+    /* moves (fl_grid_move): every third item from 1 on, half of them to a
+     * box with the same least corner (the cells both boxes cover keep
+     * their entries), half anywhere */
+    int kept_first = 0;
+    for (int i = 1; i < N; i += 3) {
+        double nb[6];
+        for (int k = 0; k < 3; k++) {
+            if (i % 2) { /* same low corner, the high one moved by up to 2 cells either way */
+                nb[k] = box[i][k];
+                nb[3 + k] = fmax(nb[k], box[i][3 + k] + 4.0 * grid_rnd(&seed) - 2.0);
+            } else {
+                double c = -2.0 + 14.0 * grid_rnd(&seed), w = 3.0 * grid_rnd(&seed) * grid_rnd(&seed);
+                nb[k] = c - w;
+                nb[3 + k] = c + w;
+            }
+        }
+        int a0[3], a1[3], b0[3], b1[3];
+        fl_grid_range(&g, box[i], box[i] + 3, a0, a1);
+        fl_grid_range(&g, nb, nb + 3, b0, b1);
+        kept_first += a0[0] == b0[0] && a0[1] == b0[1] && a0[2] == b0[2] &&
+                      (a1[0] != b1[0] || a1[1] != b1[1] || a1[2] != b1[2]);
+        CHECK(fl_grid_move(&g, (uint32_t)i, box[i], box[i] + 3, nb, nb + 3));
+        memcpy(box[i], nb, sizeof nb);
+    }
+    CHECK(kept_first > N / 20); /* the partial path ran */
     int bad = 0, total = 0;
     for (int q = 0; q < Q; q++) {
         double lo[3], hi[3];
