@@ -84,10 +84,10 @@ FL_INTERNAL int fl_grid_insert(fl_grid *g, uint32_t item, const double lo[3], co
 /* The box must be the one the item was inserted with. */
 FL_INTERNAL void fl_grid_remove(fl_grid *g, uint32_t item, const double lo[3], const double hi[3]);
 /* The item's box changes from the old (the one it was inserted with) to
- * the new: the same entries as removing and inserting it (in another
- * order within a cell), touching only the
- * cells that change when its first cell stays. 0 on ENOMEM (the item may
- * then be missing from cells of the new box). */
+ * the new: the same entries as removing and inserting it (in another order
+ * within a cell), touching only the cells that change when its first cell
+ * stays. 0 on ENOMEM (the item may then be missing from cells of the new
+ * box). */
 FL_INTERNAL int fl_grid_move(fl_grid *g, uint32_t item, const double olo[3], const double ohi[3],
                              const double nlo[3], const double nhi[3]);
 /* Puts n free blocks, from the free list, then new ones, at the head of
