@@ -95,16 +95,17 @@ static int dominant_axis(const double n[3]) {
  * when the other corners are all strictly on one side: then Q meets P's
  * plane at most in the shared corners. */
 static int plane_side(const double *const P[3], const double n[3], double nlen, const double *const Q[3],
-                      double d[3], double eps, unsigned shared) {
+                      double d[3], double raw[3], double eps, unsigned shared) {
     int pos = 0, neg = 0;
     for (int c = 0; c < 3; c++) {
         if (shared >> c & 1) {
-            d[c] = 0.0;
+            d[c] = raw[c] = 0.0;
             continue;
         }
         double r[3];
         sub3(r, Q[c], P[0]);
         double v = dot3(r, n) / nlen;
+        raw[c] = v;
         d[c] = fabs(v) <= eps ? 0.0 : v;
         pos += d[c] > 0;
         neg += d[c] < 0;
@@ -114,9 +115,14 @@ static int plane_side(const double *const P[3], const double n[3], double nlen, 
 }
 
 /* Interval of triangle T on the line direction D, from the points where T
- * meets the other plane (d: T's corners' snapped distances to it). */
-static void interval(const double *const T[3], const double d[3], const double D[3], double *lo,
-                     double *hi) {
+ * meets the other plane (d: T's corners' snapped distances to it; raw: the
+ * distances before snapping). An edge whose snapped end hides a real
+ * crossing (the raw distances change sign) adds that crossing too: a
+ * corner snapped onto the plane does not stand for its edges, which may
+ * cross it elsewhere (docs/design.md "Where the invariant was weaker").
+ * Points are only added, so the interval only widens. */
+static void interval(const double *const T[3], const double d[3], const double raw[3], const double D[3],
+                     double *lo, double *hi) {
     double a = __builtin_inf(), b = -__builtin_inf();
     for (int c = 0; c < 3; c++) {
         if (d[c] == 0.0) {
@@ -127,6 +133,12 @@ static void interval(const double *const T[3], const double d[3], const double D
         int e = (c + 1) % 3;
         if ((d[c] > 0 && d[e] < 0) || (d[c] < 0 && d[e] > 0)) {
             double s = d[c] / (d[c] - d[e]), x[3];
+            for (int k = 0; k < 3; k++) x[k] = T[c][k] + s * (T[e][k] - T[c][k]);
+            double t = dot3(x, D);
+            a = mn(a, t);
+            b = mx(b, t);
+        } else if ((d[c] == 0.0 || d[e] == 0.0) && ((raw[c] > 0 && raw[e] < 0) || (raw[c] < 0 && raw[e] > 0))) {
+            double s = raw[c] / (raw[c] - raw[e]), x[3];
             for (int k = 0; k < 3; k++) x[k] = T[c][k] + s * (T[e][k] - T[c][k]);
             double t = dot3(x, D);
             a = mn(a, t);
@@ -199,13 +211,13 @@ int fl_tri_tri_intersect_p(const double *const P[3], const uint32_t pid[3], cons
             pmask |= 1u << c;
             qmask |= 1u << sp[c];
         }
-    double dq[3], dp[3];
-    if (plane_side(P, np, lp, Q, dq, eps, qmask)) return 0;
+    double dq[3], dp[3], rq[3], rp[3];
+    if (plane_side(P, np, lp, Q, dq, rq, eps, qmask)) return 0;
     fl_tri_plane_of(Q, &qp);
     const double *nq = qp.n;
     double lq = qp.len;
     if (!(lq > 0.0)) return 0;
-    if (plane_side(Q, nq, lq, P, dp, eps, pmask)) return 0;
+    if (plane_side(Q, nq, lq, P, dp, rp, eps, pmask)) return 0;
 
     if (dq[0] == 0.0 && dq[1] == 0.0 && dq[2] == 0.0) {
         /* coplanar within eps: decide in the plane */
@@ -255,8 +267,8 @@ int fl_tri_tri_intersect_p(const double *const P[3], const uint32_t pid[3], cons
     if (!(dl > 0.0)) return 0;
     for (int k = 0; k < 3; k++) D[k] /= dl;
     double a0, a1, b0, b1;
-    interval(P, dp, D, &a0, &a1);
-    interval(Q, dq, D, &b0, &b1);
+    interval(P, dp, rp, D, &a0, &a1);
+    interval(Q, dq, rq, D, &b0, &b1);
     double overlap = mn(a1, b1) - mx(a0, b0);
     if (shared == 0) return overlap >= 0.0;
     /* One shared corner lies in both intervals: only an overlap longer than
