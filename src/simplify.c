@@ -1167,12 +1167,12 @@ static int plane_rule(const simp *S, const ring *R, const double p[3]) {
 }
 
 /* The full test found a crossing. A build with FEMLOD_SIMPLIFY_PLANE_VERIFY=1
- * runs it after the plane rule accepted too, and reports any disagreement
- * (test c_plane_verify); the rule's answer stands. */
-static int plane_disagrees(simp *S, const ring *R, const double p[3], int planar, uint32_t f,
-                           const double *const T[3], const double *const Q[3], const uint32_t *qid) {
+ * runs it after the plane rule accepted too, and prints any disagreement to
+ * stderr (a diagnostic, not a test: the full test's conservative refusals
+ * are disagreements too, docs/design.md); the rule's answer stands. */
+static int plane_disagrees(const ring *R, const double p[3], int planar, uint32_t f, const double *const T[3],
+                           const double *const Q[3], const uint32_t *qid) {
     if (!planar) return FEMLOD_REJECT_INTERSECTION;
-    (void)S;
     fprintf(stderr, "plane rule: edge %u (%u, %u) to (%.17g, %.17g, %.17g) accepted, full test: face %u\n", R->e, R->i,
             R->j, p[0], p[1], p[2], f);
     for (int c = 0; c < 3; c++) fprintf(stderr, "  T %.17g %.17g %.17g\n", T[c][0], T[c][1], T[c][2]);
@@ -1310,7 +1310,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
                                 uint32_t tid[3] = {K_ID, R->a[r], R->b[r]};
                                 STAT(tritri);
                                 if (fl_tri_tri_intersect_p(T, tid, S->sc.tplane + r, Q, t, S->eps))
-                                    return plane_disagrees(S, R, p, planar, f, T, Q, t);
+                                    return plane_disagrees(R, p, planar, f, T, Q, t);
                             }
                         }
                     }
@@ -1331,7 +1331,7 @@ static int intersect_check(simp *S, ring *R, const double p[3]) {
             const double *Q[3] = {p, P(S, R->a[s2]), P(S, R->b[s2])};
             uint32_t qid[3] = {K_ID, R->a[s2], R->b[s2]};
             if (fl_tri_tri_intersect_p(T, tid, S->sc.tplane + r, Q, qid, S->eps))
-                return plane_disagrees(S, R, p, planar, UINT32_MAX, T, Q, qid);
+                return plane_disagrees(R, p, planar, UINT32_MAX, T, Q, qid);
         }
     }
     return NO_REASON;
