@@ -2663,19 +2663,31 @@ static int progress(simp *S, const femlod_simplify_options *o, size_t live0, siz
  *
  * After each collapse the queue re-evaluates the ~33 edges at and around k
  * (reevaluate_ring), three quarters of its time. The evaluations are
- * independent, so a helper thread takes every other one: the main thread
- * publishes the list (a generation count, release), both evaluate, the
- * main thread waits for the helper's generation (acquire) and applies the
- * results in list order, as with one thread. The helper spins between
- * lists, yielding the processor now and then: it lives only while the
- * queue runs. */
+ * independent, so a helper thread shares them: the main thread publishes
+ * the list (its range in one atomic word, after the helper's view W),
+ * each thread claims one entry at a time by compare-and-swap on that word,
+ * the main thread from the front and the helper from the back, and the
+ * main thread waits only for the entries the helper has claimed (hdone),
+ * then applies the results in list order, as with one thread. A helper
+ * that is slow to wake (it sleeps after a short spin) thus costs nothing:
+ * the main thread evaluates the whole list (docs/simplify.md "Session 16":
+ * the fixed 40 / 60 split it replaces waited for the helper half the
+ * time). The helper reads W only under a claim, and a claim of the
+ * current word is a claim of the current list (its range is all the word
+ * holds), so a stale helper can neither read a half-written W nor take an
+ * entry of a finished list. It lives only while the queue runs. */
 
 typedef struct eval_helper {
     simp W; /* its view of the run, refreshed before each list */
     simp *S;
     pthread_t th;
-    size_t n;
-    atomic_uint go, done;
+    atomic_uint go; /* the lists published: wakes a sleeping helper */
+    /* the list's unclaimed range [lo, hi) as lo << 32 | hi: the main
+     * thread claims from lo up, the helper from hi down; hdone: items the
+     * helper has finished, over the whole run; htaken: the main thread's
+     * count of the items the helper has claimed */
+    _Atomic uint64_t claim, hdone;
+    uint64_t htaken;
     atomic_int quit;
     /* after a short spin the helper sleeps (so that it never holds a core
      * another process could use): sleeping is set under mu before the
@@ -2692,14 +2704,21 @@ static inline void cpu_relax(void) {
 #endif
 }
 
-/* The helper's share of the list: the last 60% (the main thread also
- * applies the results), a contiguous part rather than every other entry,
- * so that the two threads' results share no cache line. */
+/* The helper's share of the list: entries claimed from the back until
+ * the two ends meet. */
+#define CL_LO(w) ((size_t)((w) >> 32))
+#define CL_HI(w) ((size_t)((w) & 0xffffffffu))
 static void helper_share(eval_helper *h) {
     simp *S = h->S, *W = &h->W;
-    for (size_t x = h->n * 2 / 5; x < h->n; x++) {
+    for (;;) {
+        uint64_t w = atomic_load_explicit(&h->claim, memory_order_acquire);
+        if (CL_LO(w) >= CL_HI(w)) break;
+        if (!atomic_compare_exchange_weak_explicit(&h->claim, &w, w - 1, memory_order_acq_rel, memory_order_acquire))
+            continue;
+        size_t x = CL_HI(w) - 1;
         S->rrho[x] = evaluate(W, &W->R, S->rlist[x]);
         S->rtol[x] = (uint8_t)W->R.tolfail;
+        atomic_fetch_add_explicit(&h->hdone, 1, memory_order_release);
     }
 }
 
@@ -2724,7 +2743,6 @@ static void *helper_main(void *arg) {
         }
         seen = g;
         helper_share(h);
-        atomic_store_explicit(&h->done, g, memory_order_release);
     }
 }
 
@@ -2738,23 +2756,35 @@ static void helper_wake(eval_helper *h) {
 /* Evaluates S->rlist[0, n) into S->rrho and S->rtol. */
 static void ring_eval(simp *S, size_t n) {
     eval_helper *h = S->helper;
-    size_t mine = n;
-    unsigned g = 0;
-    if (h && n >= 4) {
-        simp_view(&h->W, S);
-        h->n = n;
-        g = atomic_load_explicit(&h->go, memory_order_relaxed) + 1;
-        atomic_store(&h->go, g);
-        helper_wake(h);
-        mine = n * 2 / 5;
+    if (!h || n < 2 || n >= 0xffffffffu) {
+        for (size_t x = 0; x < n; x++) {
+            S->rrho[x] = evaluate(S, &S->R, S->rlist[x]);
+            S->rtol[x] = (uint8_t)S->R.tolfail;
+        }
+        return;
     }
-    for (size_t x = 0; x < mine; x++) {
+    /* the last list is claimed whole and finished (hdone == htaken): the
+     * helper reads W only under a claim */
+    simp_view(&h->W, S);
+    atomic_store(&h->claim, (uint64_t)n);
+    atomic_store(&h->go, atomic_load_explicit(&h->go, memory_order_relaxed) + 1);
+    helper_wake(h);
+    size_t mine = 0;
+    for (;;) {
+        uint64_t w = atomic_load_explicit(&h->claim, memory_order_acquire);
+        if (CL_LO(w) >= CL_HI(w)) break;
+        if (!atomic_compare_exchange_weak_explicit(&h->claim, &w, w + ((uint64_t)1 << 32), memory_order_acq_rel,
+                                                   memory_order_acquire))
+            continue;
+        size_t x = CL_LO(w);
         S->rrho[x] = evaluate(S, &S->R, S->rlist[x]);
         S->rtol[x] = (uint8_t)S->R.tolfail;
+        mine++;
     }
     if (mine < n) {
+        h->htaken += n - mine;
         int spins = 0;
-        while (atomic_load_explicit(&h->done, memory_order_acquire) != g) {
+        while (atomic_load_explicit(&h->hdone, memory_order_acquire) != h->htaken) {
             if (++spins < 2000) {
                 cpu_relax();
             } else {
@@ -2765,7 +2795,6 @@ static void ring_eval(simp *S, size_t n) {
         if (h->W.oom) S->oom = 1;
     }
 }
-
 /* Starts the helper when the run has a second thread (none: ring_eval
  * evaluates alone; the results are the same). */
 static void helper_start(simp *S) {
@@ -2775,7 +2804,9 @@ static void helper_start(simp *S) {
     if (!h) return;
     h->S = S;
     atomic_init(&h->go, 0);
-    atomic_init(&h->done, 0);
+    atomic_init(&h->claim, 0);
+    atomic_init(&h->hdone, 0);
+    h->htaken = 0;
     atomic_init(&h->quit, 0);
     atomic_init(&h->sleeping, 0);
     if (pthread_mutex_init(&h->mu, NULL) != 0) {
@@ -3727,6 +3758,9 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
         last_retry = S->collapses;
         size_t goal = live0 > S->target ? live0 - S->target : 1;
         double done = (double)(live0 - S->live) / (double)goal;
+#if FEMLOD_SIMPLIFY_STATS
+        double tq0 = now_seconds();
+#endif
         size_t queued = evaluate_all(S, o, done > 1.0 ? 1.0 : done);
         if (S->cancelled) {
             *why = FEMLOD_STOP_CANCELLED;
@@ -3734,7 +3768,16 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
         }
         if (!queued) break;
         if (S->oom) return 0;
+#if FEMLOD_SIMPLIFY_STATS
+        double tq1 = now_seconds();
+        size_t c0 = S->collapses, e0 = S->stats.evals;
+#endif
         int r = run_queue(S, o, live0, &next);
+#if FEMLOD_SIMPLIFY_STATS
+        fprintf(stderr, "finish: evaluate_all %.3f s (%zu queued), queue %.3f s, %zu collapses, %.1f evals each (main thread)\n",
+                tq1 - tq0, queued, now_seconds() - tq1, S->collapses - c0,
+                (double)(S->stats.evals - e0) / (double)(S->collapses - c0 ? S->collapses - c0 : 1));
+#endif
         if (r != 1) {
             if (r == 2) *why = FEMLOD_STOP_CANCELLED;
             return r;
