@@ -195,7 +195,7 @@ typedef struct simp_stats {
     size_t listed[4]; /* parallel passes: vertices listed in stage 0, 1, the remainder; sub-passes */
     /* and their seconds; [3]: in par_for; [4..9]: listing, bucketing, task
      * set-up, merge, grid rebuilds, compactions */
-    double tstage[10];
+    double tstage[32];
     double tpass; /* when the last pass (or the first evaluation) ended */
 } simp_stats;
 
@@ -2081,7 +2081,7 @@ static void morton_keys(void *arg, size_t v0, size_t v1, int part) {
 }
 
 /* perm[s] = the input vertex of slot s, sorted by (Morton code, index):
- * a stable radix sort of the codes, 8 bits a pass (a pass whose digit is
+ * a stable radix sort of the codes, 11 bits a pass (a pass whose digit is
  * the same everywhere is skipped), from index order. Returns the inverse
  * (input -> slot), NULL on ENOMEM. */
 static uint32_t *morton_slots(const double *pos, size_t nv, uint32_t *perm, int nth) {
@@ -2106,14 +2106,16 @@ static uint32_t *morton_slots(const double *pos, size_t nv, uint32_t *perm, int 
     double ext = mx(hi[0] - m.lo[0], mx(hi[1] - m.lo[1], hi[2] - m.lo[2]));
     m.sc = ext > 0.0 ? 2097151.0 / ext : 0.0;
     par_ranges(nth, nv, morton_keys, &m);
-    for (int shift = 0; shift < 64; shift += 8) {
-        size_t cnt[257] = {0};
-        for (size_t v = 0; v < nv; v++) cnt[((k[v].key >> shift) & 255) + 1]++;
+    enum { RB = 11 }; /* digit bits: 6 passes cover the 63-bit codes */
+    for (int shift = 0; shift < 64; shift += RB) {
+        size_t cnt[(1 << RB) + 1] = {0};
+        const uint64_t dm = (1u << RB) - 1;
+        for (size_t v = 0; v < nv; v++) cnt[((k[v].key >> shift) & dm) + 1]++;
         int one = 0;
-        for (int d = 1; d <= 256; d++) one |= cnt[d] == nv;
+        for (int d = 1; d <= 1 << RB; d++) one |= cnt[d] == nv;
         if (one) continue;
-        for (int d = 0; d < 256; d++) cnt[d + 1] += cnt[d];
-        for (size_t v = 0; v < nv; v++) k2[cnt[(k[v].key >> shift) & 255]++] = k[v];
+        for (int d = 0; d < 1 << RB; d++) cnt[d + 1] += cnt[d];
+        for (size_t v = 0; v < nv; v++) k2[cnt[(k[v].key >> shift) & dm]++] = k[v];
         mkey *x = k;
         k = k2;
         k2 = x;
@@ -2355,6 +2357,118 @@ static void edge_renumber(void *arg, size_t f0, size_t f1, int part) {
     }
 }
 
+/* The set-up's face maps (docs/design.md "The set-up in parallel parts").
+ * Those that write per vertex (counts, the sort's scatter, the face
+ * lists) run in vertex parts, each part scanning every face in order and
+ * taking the corners in its own range: its writes are those of one
+ * sequential pass, in the same order, and the scans stream. */
+typedef struct fmap_ctx {
+    simp *S;
+    const femlod_mesh *mesh;
+    const uint32_t *slot_of;
+    uint32_t *fin0, *tmp, *cnt;
+    size_t nf[16]; /* faces kept per part of the input faces, then their offsets */
+} fmap_ctx;
+
+static inline int tri_degenerate(const uint32_t *t) { return t[0] == t[1] || t[1] == t[2] || t[0] == t[2]; }
+
+static void pos_gather(void *arg, size_t s0, size_t s1, int part) {
+    (void)part;
+    fmap_ctx *C = arg;
+    simp *S = C->S;
+    for (size_t s = s0; s < s1; s++) memcpy(S->pos + 3 * s, C->mesh->pos + 3 * (size_t)S->node[s], 3 * sizeof(double));
+}
+
+static void faces_kept(void *arg, size_t f0, size_t f1, int part) {
+    fmap_ctx *C = arg;
+    size_t n = 0;
+    for (size_t f = f0; f < f1; f++) n += !tri_degenerate(C->mesh->tri + 3 * f);
+    C->nf[part] = n;
+}
+
+/* the kept input faces in slots, and their input indices (fin0) */
+static void faces_copy(void *arg, size_t f0, size_t f1, int part) {
+    fmap_ctx *C = arg;
+    simp *S = C->S;
+    size_t w = C->nf[part];
+    for (size_t f = f0; f < f1; f++) {
+        const uint32_t *t = C->mesh->tri + 3 * f;
+        if (tri_degenerate(t)) continue;
+        for (int c = 0; c < 3; c++) S->face[w].v[c] = C->slot_of[t[c]];
+        C->fin0[w++] = (uint32_t)f;
+    }
+}
+
+/* fcount, and cnt[v + 1]: the faces whose least corner is v */
+static void faces_count(void *arg, size_t v0, size_t v1, int part) {
+    (void)part;
+    fmap_ctx *C = arg;
+    simp *S = C->S;
+    for (size_t f = 0; f < S->nt; f++) {
+        const uint32_t *t = S->face[f].v;
+        for (int c = 0; c < 3; c++)
+            if (t[c] >= v0 && t[c] < v1) S->fcount[t[c]]++;
+        uint32_t m = min3u(t);
+        if (m >= v0 && m < v1) C->cnt[m + 1]++;
+    }
+}
+
+/* the stable counting sort's scatter into tmp and fin */
+static void faces_scatter(void *arg, size_t v0, size_t v1, int part) {
+    (void)part;
+    fmap_ctx *C = arg;
+    simp *S = C->S;
+    for (size_t f = 0; f < S->nt; f++) {
+        const uint32_t *t = S->face[f].v;
+        uint32_t m = min3u(t);
+        if (m < v0 || m >= v1) continue;
+        uint32_t d = C->cnt[m]++;
+        memcpy(C->tmp + 3 * (size_t)d, t, 3 * sizeof *t);
+        S->fin[d] = C->fin0[f];
+    }
+}
+
+static void faces_back(void *arg, size_t f0, size_t f1, int part) {
+    (void)part;
+    fmap_ctx *C = arg;
+    for (size_t f = f0; f < f1; f++) memcpy(C->S->face[f].v, C->tmp + 3 * f, 3 * sizeof *C->tmp);
+}
+
+/* vertex -> faces, in increasing face order */
+static void faces_refs(void *arg, size_t v0, size_t v1, int part) {
+    (void)part;
+    fmap_ctx *C = arg;
+    simp *S = C->S;
+    for (size_t f = 0; f < S->nt; f++)
+        for (int c = 0; c < 3; c++) {
+            uint32_t v = S->face[f].v[c];
+            if (v >= v0 && v < v1) S->refs[S->fstart[v] + S->fcount[v]++] = (uint32_t)f;
+        }
+}
+
+static void edge_records(void *arg, size_t e0, size_t e1, int part) {
+    (void)part;
+    simp *S = arg;
+    size_t ne = S->ne;
+    for (size_t e = e0; e < e1; e++) {
+        S->edge[e].key = -1.0f;
+        S->edge[e].nf = e < ne ? S->enf[e] : 0;
+        S->edge[e].flag = S->edge[e].state = 0;
+        S->edge[e].v[0] = e < ne ? S->ev[2 * e] : 0;
+        S->edge[e].v[1] = e < ne ? S->ev[2 * e + 1] : 0;
+    }
+}
+
+static void cone_init(void *arg, size_t f0, size_t f1, int part) {
+    (void)part;
+    simp *S = arg;
+    for (size_t f = f0; f < f1; f++) {
+        memcpy(S->cone + 4 * f, S->face[f].n, 3 * sizeof(float));
+        if (isnan(S->cone[4 * f])) S->cone[4 * f] = S->cone[4 * f + 1] = S->cone[4 * f + 2] = 0.0f;
+        S->cone[4 * f + 3] = 0.0f;
+    }
+}
+
 #if FEMLOD_SIMPLIFY_STATS
 static double setup_t0;
 /* the process's page faults so far (minor: first touches of fresh pages,
@@ -2409,54 +2523,40 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     uint32_t *slot_of = morton_slots(mesh->pos, nv, S->node, nth);
     S->slot_of = slot_of;
     if (!slot_of) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
-    for (size_t s = 0; s < nv; s++) memcpy(S->pos + 3 * s, mesh->pos + 3 * (size_t)S->node[s], 3 * sizeof(double));
-    nt = 0;
-    for (size_t f = 0; f < nt_in; f++) {
-        const uint32_t *t = tin + 3 * f;
-        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
-        for (int c = 0; c < 3; c++) {
-            S->face[nt].v[c] = slot_of[t[c]];
-            S->fcount[slot_of[t[c]]]++;
-        }
-        nt++;
-    }
-    SETUP_T(1);
-    /* Faces in the order of their first vertex slot (a stable counting
+    /* Faces in the order of their least vertex slot (a stable counting
      * sort): the faces around a vertex then share cache lines too. fin
      * remembers each face's input index for the output order. */
-    if (!ALLOC(S->fin, nt)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
-    {
-        uint32_t *cnt = fl_populate(fl_calloc(nv + 1, sizeof *cnt), (nv + 1) * sizeof *cnt);
-        uint32_t *tmp = fl_populate(fl_alloc(3 * nt, sizeof *tmp), 3 * nt * sizeof *tmp);
-        uint32_t *fin0 = fl_populate(fl_alloc(nt, sizeof *fin0), nt * sizeof *fin0);
-        if (!cnt || !tmp || !fin0) {
-            free(cnt);
-            free(tmp);
-            free(fin0);
-            return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
-        }
-        size_t w = 0;
-        for (size_t f = 0; f < nt_in; f++) {
-            const uint32_t *t = tin + 3 * f;
-            if (t[0] != t[1] && t[1] != t[2] && t[0] != t[2]) fin0[w++] = (uint32_t)f;
-        }
-        for (size_t f = 0; f < nt; f++) {
-            const uint32_t *t = S->face[f].v;
-            cnt[min3u(t) + 1]++;
-        }
-        for (size_t v = 0; v < nv; v++) cnt[v + 1] += cnt[v];
-        for (size_t f = 0; f < nt; f++) {
-            const uint32_t *t = S->face[f].v;
-            uint32_t d = cnt[min3u(t)]++;
-            memcpy(tmp + 3 * (size_t)d, t, 3 * sizeof *t);
-            S->fin[d] = fin0[f];
-        }
-        for (size_t f = 0; f < nt; f++) memcpy(S->face[f].v, tmp + 3 * f, 3 * sizeof *tmp);
-        free(cnt);
-        free(tmp);
-        free(fin0);
+    fmap_ctx C;
+    memset(&C, 0, sizeof C);
+    C.S = S;
+    C.mesh = mesh;
+    C.slot_of = slot_of;
+    C.fin0 = fl_populate(fl_alloc(nt, sizeof *C.fin0), nt * sizeof *C.fin0);
+    C.cnt = fl_populate(fl_calloc(nv + 1, sizeof *C.cnt), (nv + 1) * sizeof *C.cnt);
+    C.tmp = fl_populate(fl_alloc(3 * nt, sizeof *C.tmp), 3 * nt * sizeof *C.tmp);
+    if (!C.fin0 || !C.cnt || !C.tmp || !ALLOC(S->fin, nt)) {
+        free(C.fin0);
+        free(C.cnt);
+        free(C.tmp);
+        return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     }
-    /* vertex -> faces, in increasing face order */
+    par_ranges(nth, nv, pos_gather, &C);
+    par_ranges(nth, nt_in, faces_kept, &C);
+    size_t run = 0;
+    for (int t = 0; t < par_parts(nth, nt_in); t++) {
+        size_t n = C.nf[t];
+        C.nf[t] = run;
+        run += n;
+    }
+    par_ranges(nth, nt_in, faces_copy, &C);
+    par_ranges(nth, nv, faces_count, &C);
+    SETUP_T(1);
+    for (size_t v = 0; v < nv; v++) C.cnt[v + 1] += C.cnt[v];
+    par_ranges(nth, nv, faces_scatter, &C);
+    par_ranges(nth, nt, faces_back, &C);
+    free(C.cnt);
+    free(C.tmp);
+    free(C.fin0);
     size_t acc = 0;
     for (size_t v = 0; v < nv; v++) {
         S->fstart[v] = (uint32_t)acc;
@@ -2469,11 +2569,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     S->nrefs = acc;
     memset(S->fcount, 0, nv * sizeof *S->fcount);
-    for (size_t f = 0; f < nt; f++)
-        for (int c = 0; c < 3; c++) {
-            uint32_t v = S->face[f].v[c];
-            S->refs[S->fstart[v] + S->fcount[v]++] = (uint32_t)f;
-        }
+    par_ranges(nth, nv, faces_refs, &C);
     SETUP_T(2);
     par_ranges(nth, nt, face_cache_range, S);
 
@@ -2525,13 +2621,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
         (FEMLOD_SIMPLIFY_BOUND && !ALLOC(S->ehint, 2 * ne + 2)))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     if (FEMLOD_SIMPLIFY_BOUND) memset(S->ehint, 0xff, (2 * ne + 2) * sizeof *S->ehint);
-    for (size_t e = 0; e <= ne; e++) {
-        S->edge[e].key = -1.0f;
-        S->edge[e].nf = e < ne ? S->enf[e] : 0;
-        S->edge[e].flag = S->edge[e].state = 0;
-        S->edge[e].v[0] = e < ne ? S->ev[2 * e] : 0;
-        S->edge[e].v[1] = e < ne ? S->ev[2 * e + 1] : 0;
-    }
+    par_ranges(nth, ne + 1, edge_records, S);
     free(S->enf);
     S->enf = NULL;
     free(S->ev);
@@ -2621,11 +2711,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
 
     if (S->cone_on) {
         if (!ALLOC(S->cone, 4 * nt)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
-        for (size_t f = 0; f < nt; f++) {
-            memcpy(S->cone + 4 * f, S->face[f].n, 3 * sizeof(float));
-            if (isnan(S->cone[4 * f])) S->cone[4 * f] = S->cone[4 * f + 1] = S->cone[4 * f + 2] = 0.0f;
-            S->cone[4 * f + 3] = 0.0f;
-        }
+        par_ranges(nth, nt, cone_init, S);
     }
     if (S->dev_on) {
         if (!ALLOC(S->fpt, nt) || !ALLOC(S->pnext, nv))
@@ -3303,6 +3389,9 @@ static void par_eval_chunk(par_ctx *X, par_worker *w, size_t k) {
 /* One task: slab t's vertices of the stage list, in order. */
 static void par_run_task(par_ctx *X, par_worker *w, size_t k) {
     simp *S = X->S, *W = &w->W;
+#if FEMLOD_SIMPLIFY_STATS
+    double tk0 = now_seconds();
+#endif
     par_task *t = X->task + k;
     const uint32_t *list = X->list[0].v;
     simp_view(W, S);
@@ -3332,6 +3421,9 @@ static void par_run_task(par_ctx *X, par_worker *w, size_t k) {
         else if (c == 1) done++;
         else if (c == 2 && !u32vec_push(&t->deferred, v)) W->oom = 1;
     }
+#if FEMLOD_SIMPLIFY_STATS
+    S->stats.tstage[10 + (w - X->wk)] += now_seconds() - tk0;
+#endif
     t->collapses = W->collapses - S->collapses;
     t->removed = S->live - W->live;
     t->swept = W->swept;
@@ -3933,6 +4025,7 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
     STAT_TIME(5, t5);
     fprintf(stderr, "simplify seconds: setup %.3f pre-phase %.3f first evaluation %.3f passes %.3f queue %.3f output %.3f\n",
             S->stats.t[0], S->stats.t[1], S->stats.t[2], S->stats.t[3], S->stats.t[4], S->stats.t[5]);
+    fprintf(stderr, "busy in tasks per worker: %.3f %.3f %.3f %.3f\n", S->stats.tstage[10], S->stats.tstage[11], S->stats.tstage[12], S->stats.tstage[13]);
     fprintf(stderr, "band attempts %zu, below tau on re-evaluation %zu\n", S->stats.attempts, S->stats.attempt_low);
     fprintf(stderr, "parallel passes: listed %zu / %zu / %zu, seconds %.3f / %.3f / %.3f; %zu sub-passes, %.3f s in tasks\n", S->stats.listed[0],
             S->stats.listed[1], S->stats.listed[2], S->stats.tstage[0], S->stats.tstage[1], S->stats.tstage[2], S->stats.listed[3], S->stats.tstage[3]);
