@@ -1456,22 +1456,56 @@ static void list_remove(simp *S, uint32_t v, uint32_t f) {
         }
 }
 
-static int compact_refs(simp *S) {
-    size_t total = 0;
-    for (size_t v = 0; v < S->nv; v++) total += S->fcount[v];
-    /* room for as many appended lists again: compaction stays amortised O(1) */
-    size_t cap = 2 * total + 1024;
-    uint32_t *nr = fl_populate(fl_alloc(cap, sizeof *nr), total * sizeof *nr); /* the part copied now */
-    if (!nr) return 0;
-    size_t w = 0;
-    for (size_t v = 0; v < S->nv; v++) {
-        memcpy(nr + w, S->refs + S->fstart[v], S->fcount[v] * sizeof *nr);
+typedef void (*range_fn)(void *ctx, size_t lo, size_t hi, int part);
+static void par_ranges(int nth, size_t n, range_fn fn, void *ctx);
+static int par_parts(int nth, size_t n);
+
+/* compact_refs in vertex parts: each part's lists, at its offset */
+typedef struct compact_ctx {
+    simp *S;
+    uint32_t *nr;
+    size_t at[16];
+} compact_ctx;
+
+static void compact_count(void *arg, size_t v0, size_t v1, int part) {
+    compact_ctx *C = arg;
+    size_t n = 0;
+    for (size_t v = v0; v < v1; v++) n += C->S->fcount[v];
+    C->at[part] = n;
+}
+
+static void compact_copy(void *arg, size_t v0, size_t v1, int part) {
+    compact_ctx *C = arg;
+    simp *S = C->S;
+    size_t w = C->at[part], w0 = w;
+    for (size_t v = v0; v < v1; v++) w += S->fcount[v];
+    fl_populate(C->nr + w0, (w - w0) * sizeof *C->nr); /* the part copied now */
+    w = w0;
+    for (size_t v = v0; v < v1; v++) {
+        memcpy(C->nr + w, S->refs + S->fstart[v], S->fcount[v] * sizeof *C->nr);
         S->fstart[v] = (uint32_t)w;
         w += S->fcount[v];
     }
+}
+
+static int compact_refs(simp *S) {
+    compact_ctx C;
+    C.S = S;
+    par_ranges(S->nthreads, S->nv, compact_count, &C);
+    size_t total = 0;
+    for (int t = 0; t < par_parts(S->nthreads, S->nv); t++) {
+        size_t n = C.at[t];
+        C.at[t] = total;
+        total += n;
+    }
+    /* room for as many appended lists again: compaction stays amortised O(1) */
+    size_t cap = 2 * total + 1024;
+    C.nr = fl_alloc(cap, sizeof *C.nr);
+    if (!C.nr) return 0;
+    par_ranges(S->nthreads, S->nv, compact_copy, &C);
     free(S->refs);
-    S->refs = nr;
-    S->nrefs = w;
+    S->refs = C.nr;
+    S->nrefs = total;
     S->caprefs = cap;
     return 1;
 }
@@ -1994,8 +2028,6 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
  * writes; cut into contiguous ranges, one per thread, they give the same
  * bytes for any thread count. */
 
-
-typedef void (*range_fn)(void *ctx, size_t lo, size_t hi, int part);
 
 typedef struct range_job {
     void *ctx;
