@@ -194,7 +194,8 @@ typedef struct simp_stats {
     double t[6]; /* seconds: setup, pre-phase, first evaluation of the passes, passes, queue, output */
     size_t listed[4]; /* parallel passes: vertices listed in stage 0, 1, the remainder; sub-passes */
     /* and their seconds; [3]: in par_for; [4..9]: listing, bucketing, task
-     * set-up, merge, grid rebuilds, compactions */
+     * set-up, merge, grid rebuilds, compactions; [10 + t]: worker t's
+     * seconds in tasks */
     double tstage[32];
     double tpass; /* when the last pass (or the first evaluation) ended */
 } simp_stats;
