@@ -24,8 +24,8 @@
  * memory" (meshopt_setAllocator: a bump arena whose pages an untimed
  * first call has already touched). On the VMs here a first-touch page
  * fault costs 10-28 microseconds and more when the host is busy, which
- * is about a third of meshoptimizer's time and most of its run-to-run
- * spread; the warm figure is its time without them, the steadier
+ * was 11-20% of meshoptimizer's time in session 17's runs and most of
+ * its run-to-run spread; the warm figure is its time without them, the steadier
  * comparison and the harder one for femlod (which maps its own blocks
  * at once but still pays for them). */
 #include "femlod.h"
@@ -148,11 +148,10 @@ int main(int argc, char **argv) {
     if (!fpos || !idx || !dst) return 1;
     for (size_t i = 0; i < 3 * nv; i++) fpos[i] = (float)pos[i];
     for (size_t i = 0; i < 3 * nt; i++) idx[i] = tri[i];
-    /* touched now, so that the warm arena's measured pages are its own */
-    memset(dst, 0, 3 * nt * sizeof *dst);
-    /* address space only: the pages a call touches are what it maps */
-    /* (smaller where the system refuses to overcommit; meshoptimizer
-     * takes 148 MB of it, 112 MB touched, for the 1.25M-triangle benchmark) */
+    /* the warm arena: address space only, the pages a call touches are
+     * what it maps (smaller where the system refuses to overcommit;
+     * meshoptimizer takes 148 MB of it, 112 MB touched, on the
+     * 1.25M-triangle benchmark) */
     arena = MAP_FAILED;
     for (arena_cap = (size_t)4 << 30; arena == MAP_FAILED && arena_cap >= ((size_t)256 << 20); arena_cap /= 4)
         arena = mmap(NULL, arena_cap, PROT_READ | PROT_WRITE, MAP_PRIVATE | MAP_ANONYMOUS | MAP_NORESERVE, -1, 0);
