@@ -27,7 +27,14 @@
  * was 11-20% of meshoptimizer's time in session 17's runs and most of
  * its run-to-run spread; the warm figure is its time without them, the steadier
  * comparison and the harder one for femlod (which maps its own blocks
- * at once but still pays for them). */
+ * at once but still pays for them).
+ *
+ * Each femlod run is also paired with a meshoptimizer run (as programs
+ * call it) made just before it: femlod's exact mode runs for about 25 s,
+ * so the round's first meshoptimizer run can be half a minute older than
+ * the fast runs, and the host's load changes within minutes. The paired
+ * ratio of each round compares two runs a few seconds apart; its median
+ * and range over the rounds are printed for every femlod mode. */
 #include "femlod.h"
 
 #include <meshoptimizer.h>
@@ -179,6 +186,7 @@ int main(int argc, char **argv) {
          * machine's load (it is shared) falls on every contender alike
          * rather than on whichever ran while it lasted */
         double tm[MAXRUNS], cm[MAXRUNS], tw[MAXRUNS], cw[MAXRUNS], tf[3][MAXRUNS], cf[3][MAXRUNS];
+        double pr[3][MAXRUNS]; /* paired ratios: each femlod run over the meshoptimizer run just before it */
         size_t mo_n = 0, mo_nw = 0;
         double cdummy;
         /* untimed: touches the arena's pages for the warm runs (they stay
@@ -207,6 +215,12 @@ int main(int argc, char **argv) {
                 o.fast_above = modes[mode];
                 o.threads = threads[mode];
                 femlod_mesh *x = NULL;
+                size_t mo_p = 0;
+                double cpair, tpair = meshopt_timed(dst, idx, 3 * nt, fpos, nv, 3 * targets[k], 0, &mo_p, &cpair);
+                if (mo_p != mo_n) {
+                    fprintf(stderr, "bench_simplify: meshoptimizer gave %zu and %zu indices\n", mo_n, mo_p);
+                    return 1;
+                }
                 t0 = now();
                 c0 = cpu_now();
                 if (femlod_simplify(&x, NULL, m, &o, &res[mode], &err) != FEMLOD_OK) {
@@ -215,6 +229,7 @@ int main(int argc, char **argv) {
                 }
                 tf[mode][r] = now() - t0;
                 cf[mode][r] = cpu_now() - c0;
+                pr[mode][r] = tpair > 0 ? tf[mode][r] / tpair : 0.0;
                 /* peak memory after this mode's first run (getrusage's
                  * peak only grows: later modes show the largest so far) */
                 if (r == 0) memf[mode] = peak_mb();
@@ -252,6 +267,9 @@ int main(int argc, char **argv) {
                    "peak memory so far %.0f MB, %.0f bytes per input triangle above the loaded input\n",
                    b > 0 ? a / b : 0.0, bc > 0 ? ac / bc : 0.0, bw > 0 ? a / bw : 0.0, res[mode].fast_collapses, res[mode].collapses,
                    res[mode].threads, memf[mode] - arena_mb, (memf[mode] - arena_mb - mem0) * 1048576.0 / (double)nt);
+            double pm = median(pr[mode], runs); /* sorts pr[mode]: lowest first */
+            printf("    paired with a meshoptimizer run just before each: median %.1fx, rounds %.1fx to %.1fx\n", pm,
+                   pr[mode][0], pr[mode][runs - 1]);
             femlod_mesh_free(out[mode]);
         }
         femlod_mesh_free(mo);
