@@ -70,6 +70,9 @@ int main(int argc, char **argv) {
         {"cover-fast-dev-lock", "cover.obj", 0, 3000, 0, 0.3, 0, 0.05, 0, 10, 0, 0, 1, 0, 0, 1.5},
         {"bunny-fast-3k", "bunny.obj", 0, 3000, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 2},
         {"cover1-fast-12k", "cover.obj", 1, 12000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0, 2},
+        /* the benchmark's input and options (bench_simplify's fast mode) */
+        {"cover2-fast-50k", "cover.obj", 2, 50000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0, 2},
+        {"cover2-fast-12k", "cover.obj", 2, 12000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0, 2},
     };
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
         const scase *k = cases + c;
