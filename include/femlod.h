@@ -488,9 +488,18 @@ typedef struct femlod_simplify_options {
      * success: every intermediate mesh is valid). */
     femlod_progress_fn progress;
     void *progress_payload;
+    /* With a collapse log (log not NULL): 0 (the default) stops at the
+     * target; N >= 1 goes on past the target, down to N triangles or as far
+     * as the thresholds allow (1: the coarsest mesh they allow), so that the
+     * hierarchy built from the log reaches coarser fronts than the target.
+     * The returned mesh, and the hierarchy's first front, are the state at
+     * the target either way: the collapses up to it are the same as without
+     * a floor (docs/design.md "The hierarchy below the target"). Ignored
+     * without a log or a target. */
+    size_t hierarchy_floor;
 } femlod_simplify_options;
 
-#define FEMLOD_SIMPLIFY_OPTIONS_INIT {0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0, NULL, 0, NULL, NULL, NULL, NULL}
+#define FEMLOD_SIMPLIFY_OPTIONS_INIT {0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0, NULL, 0, NULL, NULL, NULL, NULL, 0}
 
 typedef enum femlod_stop_reason {
     FEMLOD_STOP_TARGET = 0,        /* the target count was reached */
@@ -541,6 +550,14 @@ typedef struct femlod_simplify_result {
     int max_valence;
     double fast_above; /* the fast_above factor, FEMLOD_SIMPLIFY_OFF when off */
     int threads;       /* threads the run had (options.threads resolved; the exact queue uses two at most) */
+    /* The log's extent past the target (options.hierarchy_floor): the
+     * triangles of its coarsest state and why it stopped there (equal to
+     * triangles and stop_reason without a floor), and the check that refused
+     * most edges in its last full evaluation (FEMLOD_REJECT_COUNT when it
+     * stopped at the floor, or none was refused). */
+    size_t hierarchy_triangles;
+    femlod_stop_reason hierarchy_stop;
+    int hierarchy_binding; /* a femlod_reject */
 } femlod_simplify_result;
 
 /* The collapse log: every collapse in order, in a vertex numbering made for
@@ -571,6 +588,10 @@ size_t femlod_collapse_log_count(const femlod_collapse_log *log);
 size_t femlod_collapse_log_input_vertices(const femlod_collapse_log *log);
 /* Collapses 0..n-1 were the stretch pre-phase. */
 size_t femlod_collapse_log_prephase(const femlod_collapse_log *log);
+/* Collapses 0..n-1 made the simplification's output mesh; the ones after
+ * them went on past the target (options.hierarchy_floor). Equal to the
+ * count without a floor. */
+size_t femlod_collapse_log_front(const femlod_collapse_log *log);
 /* Collapse c < count; the views stay valid until the log is freed. */
 void femlod_collapse_log_get(const femlod_collapse_log *log, size_t c, femlod_collapse *out);
 /* Node id of a local ref of c->faces. */
@@ -607,7 +628,8 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **log, cons
  * The binary vertex hierarchy of a simplification: leaves are the input
  * vertices (node ids 0..V-1), collapse c made node V+c from its two
  * children. The *front* is the set of nodes that form the current mesh; it
- * starts at the simplification's result. Splits and collapses resolve their
+ * starts at the simplification's result (the mesh at its target, also when
+ * the log goes on past it: femlod_collapse_log_front). Splits and collapses resolve their
  * dependencies themselves, and every front is a valid mesh: every triangle
  * of it appeared during the simplification (docs/design.md gives the rule
  * and its proof). Lua numbers nodes from 1 (id + 1).
@@ -673,7 +695,9 @@ femlod_status femlod_hierarchy_refine(femlod_hierarchy *h, double size, femlod_s
                                       void *payload, size_t *ops, femlod_error *err);
 /* The inverse: collapses a pair whose two children are on the front while
  * the parent's e_size is at most its threshold (fn(parent) or `size`);
- * coarsen(INFINITY) gives back the simplification's result. */
+ * coarsen(INFINITY) gives the coarsest front the hierarchy has: the
+ * simplification's result, or, when it went on past its target
+ * (options.hierarchy_floor), the mesh it reached there. */
 femlod_status femlod_hierarchy_coarsen(femlod_hierarchy *h, double size, femlod_size_fn fn,
                                        void *payload, size_t *ops, femlod_error *err);
 
@@ -698,6 +722,26 @@ femlod_status femlod_hierarchy_extract(femlod_hierarchy *h, femlod_mesh **out, u
 femlod_status femlod_hierarchy_rescale(femlod_hierarchy *h, size_t target,
                                        const femlod_progress_options *options, size_t *ops,
                                        femlod_error *err);
+
+/* Why the last rescale stopped away from its target (it stops at the
+ * nearest front the hierarchy has, and succeeds). */
+typedef enum femlod_lod_limit {
+    FEMLOD_LIMIT_NONE = 0,     /* the target was reached (or no rescale yet) */
+    FEMLOD_LIMIT_COARSEST = 1, /* every root is on the front: the thresholds allow no coarser mesh */
+    FEMLOD_LIMIT_FINEST = 2,   /* every leaf is on the front: the input's count */
+    FEMLOD_LIMIT_DEPENDENCIES = 3 /* every operation left moves the count past the target */
+} femlod_lod_limit;
+femlod_lod_limit femlod_hierarchy_last_limit(const femlod_hierarchy *h);
+/* A short reason, for messages: "tolerance" (the check that refused most
+ * edges when the simplification could go no further, when known), "the
+ * thresholds allow no coarser mesh", "the input's count", "dependencies";
+ * "" for FEMLOD_LIMIT_NONE. */
+const char *femlod_hierarchy_limit_reason(const femlod_hierarchy *h);
+/* The check (a femlod_reject) that refused most edges when the
+ * simplification stopped going coarser; FEMLOD_REJECT_COUNT when unknown
+ * or when it stopped at a floor. Set by femlod_hierarchy_create from the
+ * log, and by femlod_hierarchy_load from the file's result block. */
+int femlod_hierarchy_coarsest_binding(const femlod_hierarchy *h);
 
 /* Curvature LOD (paper 5.3.1a). set_curvature stores kappa (one value per
  * input vertex, finite and >= 0, e.g. femlod_mesh_curvature's kappa of

@@ -26,6 +26,7 @@
 #include <string.h>
 
 #include "hierarchy.h"
+#include "simplify_log.h"
 
 static int is_internal(const femlod_hierarchy *h, uint32_t x) { return x >= h->nv; }
 
@@ -464,8 +465,8 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
     for (size_t x = nn; x-- > 0;)
         if (h->parent[x] != NONE) h->depth[x] = h->depth[h->parent[x]] + 1;
 
-    /* The first front: the simplification's result (every collapse applied);
-     * its faces are the ones the replay left alive. */
+    /* Every collapse applied: the faces alive are the ones the replay left
+     * alive (a check of the log). */
     for (size_t x = 0; x < nn; x++) h->state[x] = h->parent[x] == NONE ? FRONT : BELOW;
     rebuild_sets(h);
     for (size_t f = 0; f < nf; f++)
@@ -473,6 +474,19 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
             st = fl_error(err, FEMLOD_EINPUT, "collapse log: face %zu outlives a corner", f);
             goto done;
         }
+    /* The first front: the simplification's result, after the first
+     * `front` collapses (a prefix of the log is a state the simplification
+     * passed through, so it is vstar-closed; docs/design.md "The hierarchy
+     * below the target"). */
+    h->binding = log->binding;
+    h->last_limit = FEMLOD_LIMIT_NONE;
+    size_t front = femlod_collapse_log_front(log);
+    if (front < nc) {
+        size_t top = nv + front; /* nodes >= top are not born yet */
+        for (size_t x = 0; x < nn; x++)
+            h->state[x] = x >= top ? ABOVE : (h->parent[x] == NONE || h->parent[x] >= top) ? FRONT : BELOW;
+        rebuild_sets(h);
+    }
     fl_progress_end(&prog);
 
 done:

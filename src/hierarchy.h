@@ -31,6 +31,8 @@ struct femlod_hierarchy {
     uint32_t *removed;       /* face ids removed by each collapse */
     uint32_t *created_start; /* nc+1: created faces of c are nf_in + created_start[c] .. */
     double *kappa;           /* nn or NULL: curvature (femlod_hierarchy_set_curvature) */
+    int binding;             /* femlod_reject that stopped the coarsest collapses, or FEMLOD_REJECT_COUNT */
+    int last_limit;          /* femlod_lod_limit of the last rescale */
     /* state */
     uint8_t *state;        /* nn */
     uint32_t *front;       /* front nodes, in no particular order */

@@ -29,7 +29,8 @@
 static const unsigned char MAGIC[8] = {0x89, 'F', 'L', 'H', '\r', '\n', 0x1a, '\n'};
 #define FLH_VERSION 1u
 #define FLH_HAS_RESULT 1u
-#define RESULT_FIELDS (17u + FEMLOD_REJECT_COUNT)
+#define RESULT_FIELDS_V1 (17u + FEMLOD_REJECT_COUNT) /* files written before the log's extent was stored */
+#define RESULT_FIELDS (20u + FEMLOD_REJECT_COUNT)
 
 /* {====== writing: a stream that keeps the CRC */
 
@@ -178,6 +179,9 @@ femlod_status femlod_hierarchy_save(const femlod_hierarchy *h, const char *path,
         w_f64(w, r->feature_angle);
         w_f64(w, r->feature_weight);
         w_f64(w, r->max_normal_change);
+        w_u64(w, r->hierarchy_triangles);
+        w_u64(w, (uint64_t)r->hierarchy_stop);
+        w_u64(w, (uint64_t)(int64_t)r->hierarchy_binding);
     }
     w_flush(w);
     uLong crc = w->crc;
@@ -375,7 +379,8 @@ femlod_status femlod_hierarchy_load_memory(femlod_hierarchy **out, const void *b
     if (flags & FLH_HAS_RESULT) {
         if (!need(&r, 4, "the result")) goto parse_error;
         uint32_t fields = r_u32(&r);
-        if (fields != RESULT_FIELDS || !need(&r, 8 * (size_t)fields, "the result")) {
+        if ((fields != RESULT_FIELDS && fields != RESULT_FIELDS_V1) ||
+            !need(&r, 8 * (size_t)fields, "the result")) {
             if (r.st == FEMLOD_OK)
                 st = fl_error(err, FEMLOD_EPARSE, "%s: result block has %u fields, expected %u",
                               path, fields, RESULT_FIELDS);
@@ -404,6 +409,18 @@ femlod_status femlod_hierarchy_load_memory(femlod_hierarchy **out, const void *b
         res.feature_angle = r_f64(&r);
         res.feature_weight = r_f64(&r);
         res.max_normal_change = r_f64(&r);
+        res.hierarchy_triangles = res.triangles;
+        res.hierarchy_stop = res.stop_reason;
+        res.hierarchy_binding = FEMLOD_REJECT_COUNT;
+        if (fields == RESULT_FIELDS) {
+            res.hierarchy_triangles = (size_t)r_u64(&r);
+            uint64_t hs = r_u64(&r);
+            res.hierarchy_stop = hs == 1 ? FEMLOD_STOP_NO_VALID_EDGE
+                                 : hs == 2 ? FEMLOD_STOP_CANCELLED
+                                           : FEMLOD_STOP_TARGET;
+            int64_t hb = (int64_t)r_u64(&r);
+            res.hierarchy_binding = hb >= 0 && hb < FEMLOD_REJECT_COUNT ? (int)hb : FEMLOD_REJECT_COUNT;
+        }
     }
     if (r.at != r.size) {
         st = fl_error(err, FEMLOD_EPARSE, "%s: byte %zu: unexpected data after the hierarchy", path,
@@ -423,6 +440,7 @@ femlod_status femlod_hierarchy_load_memory(femlod_hierarchy **out, const void *b
             st = fl_error(err, FEMLOD_EPARSE, "%s: %s", path, e2.message);
             goto done;
         }
+        if (flags & FLH_HAS_RESULT) h->binding = res.hierarchy_binding;
     }
     goto done;
 

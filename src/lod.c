@@ -116,7 +116,7 @@ static int can_split(const femlod_hierarchy *h, uint32_t x) {
  * (it would change regions that the density order did not choose). */
 static size_t run(femlod_hierarchy *h, fl_heap *heap, const double *r, const double *u,
                   uint32_t *waiting, size_t target, int down, fl_progress *prog,
-                  int *cancelled) {
+                  int *cancelled, int *limit) {
     size_t done = 0, nwait = 0, n0 = h->active_n;
     int forced = 0;
     double sign = down ? -1.0 : 1.0; /* down: smallest r first */
@@ -126,7 +126,18 @@ static size_t run(femlod_hierarchy *h, fl_heap *heap, const double *r, const dou
     }
     while (down ? h->active_n > target : h->active_n < target) {
         if (fl_heap_size(heap) == 0) {
-            if (forced || nwait == 0) break;
+            if (forced || nwait == 0) {
+                /* nothing left in this direction: every root (down) or every
+                 * leaf (up) on the front, or only operations that the
+                 * dependencies made move past the target */
+                int end = 1;
+                for (size_t p = 0; p < h->front_n && end; p++) {
+                    uint32_t x = h->front[p];
+                    end = down ? h->parent[x] == NONE : x < h->nv;
+                }
+                *limit = end ? (down ? FEMLOD_LIMIT_COARSEST : FEMLOD_LIMIT_FINEST) : FEMLOD_LIMIT_DEPENDENCIES;
+                break;
+            }
             forced = 1; /* only dependent operations are left: allow them */
             for (size_t w = 0; w < nwait; w++) {
                 uint32_t q = waiting[w];
@@ -192,8 +203,10 @@ femlod_status femlod_hierarchy_rescale(femlod_hierarchy *h, size_t target,
                      h->active_n > target ? h->active_n - target : target - h->active_n);
     h->collect = 1;
     h->work_n = 0;
+    int limit = FEMLOD_LIMIT_NONE;
     if (h->active_n != target)
-        done = run(h, &heap, r, u, waiting, target, h->active_n > target, &prog, &cancelled);
+        done = run(h, &heap, r, u, waiting, target, h->active_n > target, &prog, &cancelled, &limit);
+    h->last_limit = h->active_n == target ? FEMLOD_LIMIT_NONE : limit ? limit : FEMLOD_LIMIT_DEPENDENCIES;
     h->collect = 0;
     h->work_n = 0;
     fl_heap_free(&heap);
@@ -473,6 +486,29 @@ femlod_status femlod_hierarchy_refine_region(femlod_hierarchy *h, const femlod_r
     }
     free(d);
     return st;
+}
+
+/* }====== */
+
+/* {====== what stopped the last rescale */
+
+femlod_lod_limit femlod_hierarchy_last_limit(const femlod_hierarchy *h) {
+    return (femlod_lod_limit)h->last_limit;
+}
+
+int femlod_hierarchy_coarsest_binding(const femlod_hierarchy *h) { return h->binding; }
+
+const char *femlod_hierarchy_limit_reason(const femlod_hierarchy *h) {
+    switch ((femlod_lod_limit)h->last_limit) {
+    case FEMLOD_LIMIT_NONE: return "";
+    case FEMLOD_LIMIT_COARSEST:
+        return h->binding >= 0 && h->binding < FEMLOD_REJECT_COUNT
+                   ? femlod_reject_name((femlod_reject)h->binding)
+                   : "the thresholds allow no coarser mesh";
+    case FEMLOD_LIMIT_FINEST: return "the input's count";
+    case FEMLOD_LIMIT_DEPENDENCIES: return "dependencies";
+    }
+    return "";
 }
 
 /* }====== */

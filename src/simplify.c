@@ -333,6 +333,8 @@ typedef struct simp {
     femlod_collapse_log *log;
     size_t collapses, prephase;
     size_t rejected[FEMLOD_REJECT_COUNT];
+    int binding; /* the check that refused most edges in the last full evaluation (finish) */
+    size_t prog_target; /* the count progress is measured towards: target, or the floor past it */
     int oom;
     int cancelled;  /* the progress callback asked to stop during evaluate_all */
 #if FEMLOD_SIMPLIFY_STATS
@@ -2770,7 +2772,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
 static int progress(simp *S, const femlod_simplify_options *o, size_t live0, size_t *next) {
     if (!o->progress) return 0;
     if (S->collapses < *next) return 0;
-    size_t goal = live0 > S->target ? live0 - S->target : 1;
+    size_t goal = live0 > S->prog_target ? live0 - S->prog_target : 1;
     size_t done = live0 - S->live;
     *next = S->collapses + (goal / 100 > 0 ? goal / 100 : 1);
     double d = (double)done / (double)goal;
@@ -3874,8 +3876,13 @@ done:
 
 /* }====== */
 
-static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_reason *why) {
+static int finish(simp *S, const femlod_simplify_options *o, size_t live0, size_t *nextp,
+                  femlod_stop_reason *why);
+
+static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_reason *why, size_t *live0p,
+                        size_t *nextp) {
     size_t live0 = S->live, next = 0;
+    *live0p = live0;
     *why = FEMLOD_STOP_NO_VALID_EDGE;
     /* pre-phase (4.2.2): only edges of triangles below min_stretch */
 #if FEMLOD_SIMPLIFY_STATS
@@ -3912,10 +3919,32 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
             }
         }
     }
+    *nextp = next;
+    return finish(S, o, live0, nextp, why);
+}
+
+/* Every edge's refusals so far: the main thread's and evaluate_all's
+ * workers' counts. */
+static void rejected_total(const simp *S, size_t out[FEMLOD_REJECT_COUNT]) {
+    memcpy(out, S->rejected, FEMLOD_REJECT_COUNT * sizeof *out);
+    if (S->ectx)
+        for (int t = 0; t < S->ectx->nw; t++)
+            for (int k = 0; k < FEMLOD_REJECT_COUNT; k++) out[k] += S->ectx->wk[t].W.rejected[k];
+}
+
+/* The exact order down to S->target: evaluate everything not queued, run
+ * the queue, again until the target or until a full evaluation queues
+ * nothing. S->binding gets the check that refused most edges in that last
+ * evaluation. Returns as simplify_run. */
+static int finish(simp *S, const femlod_simplify_options *o, size_t live0, size_t *nextp,
+                  femlod_stop_reason *why) {
+    size_t next = *nextp;
 #if FEMLOD_SIMPLIFY_STATS
     double t4 = now_seconds();
 #endif
     size_t last_retry = (size_t)-1;
+    size_t before[FEMLOD_REJECT_COUNT] = {0}, after[FEMLOD_REJECT_COUNT];
+    *why = FEMLOD_STOP_NO_VALID_EDGE;
     for (;;) {
         if (S->live <= S->target) break;
         /* evaluate everything not queued: at the start, and again when the
@@ -3923,11 +3952,12 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
          * (an intersection with a triangle that has moved away since) */
         if (last_retry == S->collapses) break;
         last_retry = S->collapses;
-        size_t goal = live0 > S->target ? live0 - S->target : 1;
+        size_t goal = live0 > S->prog_target ? live0 - S->prog_target : 1;
         double done = (double)(live0 - S->live) / (double)goal;
 #if FEMLOD_SIMPLIFY_STATS
         double tq0 = now_seconds();
 #endif
+        rejected_total(S, before);
         size_t queued = evaluate_all(S, o, done > 1.0 ? 1.0 : done);
         if (S->cancelled) {
             *why = FEMLOD_STOP_CANCELLED;
@@ -3940,6 +3970,7 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
         size_t c0 = S->collapses, e0 = S->stats.evals;
 #endif
         int r = run_queue(S, o, live0, &next);
+        *nextp = next;
 #if FEMLOD_SIMPLIFY_STATS
         fprintf(stderr, "finish: evaluate_all %.3f s (%zu queued), queue %.3f s, %zu collapses, %.1f evals each (main thread)\n",
                 tq1 - tq0, queued, now_seconds() - tq1, S->collapses - c0,
@@ -3951,6 +3982,15 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
         }
     }
     if (S->live <= S->target) *why = FEMLOD_STOP_TARGET;
+    /* the check that refused most in the last round (no valid edge) */
+    S->binding = FEMLOD_REJECT_COUNT;
+    rejected_total(S, after);
+    size_t most = 0;
+    for (int k = 0; k < FEMLOD_REJECT_COUNT; k++)
+        if (after[k] - before[k] > most) {
+            most = after[k] - before[k];
+            S->binding = k;
+        }
     STAT_TIME(4, t4);
     return 1;
 }
@@ -4081,21 +4121,49 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
             return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
         }
     }
-    femlod_stop_reason why = FEMLOD_STOP_NO_VALID_EDGE;
-    int r = simplify_run(S, o, &why);
-    if (S->ectx) /* evaluate_all's threads' rejection counts */
-        for (int t = 0; t < S->ectx->nw; t++)
-            for (int k = 0; k < FEMLOD_REJECT_COUNT; k++) S->rejected[k] += S->ectx->wk[t].W.rejected[k];
+    /* Past the target (docs/design.md "The hierarchy below the target"):
+     * the output is taken at the target, then the exact order goes on down
+     * to the floor, extending only the log. */
+    size_t floor_live = 0;
+    int extend = S->log && o->hierarchy_floor > 0 && S->target > 0 && o->hierarchy_floor < S->target;
+    if (extend) floor_live = o->hierarchy_floor;
+    S->prog_target = extend ? floor_live : S->target;
+    femlod_stop_reason why = FEMLOD_STOP_NO_VALID_EDGE, hwhy;
+    size_t live0 = 0, next = 0;
+    int r = simplify_run(S, o, &why, &live0, &next);
     femlod_mesh *m = NULL;
     double t5 = now_seconds();
     (void)t5;
+    size_t out_collapses = S->collapses, out_rejected[FEMLOD_REJECT_COUNT];
+    rejected_total(S, out_rejected);
     if (r == 0 || make_output(S, &m, S->log) != FEMLOD_OK) {
         femlod_collapse_log_free(S->log);
         simp_free(S);
         free(S);
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
     }
-    if (S->log) S->log->prephase = S->prephase;
+    hwhy = why;
+    if (S->log) {
+        S->log->prephase = S->prephase;
+        S->log->front = S->collapses;
+        S->log->binding = why == FEMLOD_STOP_NO_VALID_EDGE ? S->binding : FEMLOD_REJECT_COUNT;
+    }
+    if (extend && r == 1 && why == FEMLOD_STOP_TARGET) {
+        size_t target0 = S->target;
+        S->target = floor_live;
+        r = finish(S, o, live0, &next, &hwhy);
+        if (r == 0) {
+            femlod_mesh_free(m);
+            femlod_collapse_log_free(S->log);
+            simp_free(S);
+            free(S);
+            return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+        }
+        /* a cancel here keeps the result at the target: the log is as far
+         * as it got, every state of it valid */
+        S->log->binding = hwhy == FEMLOD_STOP_NO_VALID_EDGE ? S->binding : FEMLOD_REJECT_COUNT;
+        S->target = target0;
+    }
 #if FEMLOD_SIMPLIFY_STATS
     STAT_TIME(5, t5);
     fprintf(stderr, "simplify seconds: setup %.3f pre-phase %.3f first evaluation %.3f passes %.3f queue %.3f output %.3f\n",
@@ -4122,10 +4190,13 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
         result->triangles = m->nt;
         result->vertices = m->nv;
         result->stop_reason = why;
-        result->collapses = S->collapses;
+        result->collapses = out_collapses;
         result->prephase_collapses = S->prephase;
         result->fast_collapses = S->swept;
-        memcpy(result->rejected, S->rejected, sizeof result->rejected);
+        memcpy(result->rejected, out_rejected, sizeof result->rejected);
+        result->hierarchy_triangles = S->live;
+        result->hierarchy_stop = hwhy;
+        result->hierarchy_binding = S->log ? S->log->binding : FEMLOD_REJECT_COUNT;
         size_t bad = 0;
         for (size_t f = 0; f < m->nt; f++) {
             const uint32_t *t = m->tri + 3 * f;

@@ -18,6 +18,8 @@ femlod_collapse_log *fl_log_new(size_t nv_in, size_t expected) {
     femlod_collapse_log *log = calloc(1, sizeof *log);
     if (!log) return NULL;
     log->nv_in = nv_in;
+    log->front = SIZE_MAX;
+    log->binding = FEMLOD_REJECT_COUNT;
     log->cap = expected < 16 ? 16 : expected;
     log->cap_vstars = log->cap * 8;
     log->cap_faces = log->cap * 10;
@@ -155,6 +157,9 @@ size_t femlod_collapse_log_count(const femlod_collapse_log *log) { return log->n
 size_t femlod_collapse_log_input_vertices(const femlod_collapse_log *log) { return log->nv_in; }
 
 size_t femlod_collapse_log_prephase(const femlod_collapse_log *log) { return log->prephase; }
+size_t femlod_collapse_log_front(const femlod_collapse_log *log) {
+    return log->front < log->n ? log->front : log->n;
+}
 
 void femlod_collapse_log_get(const femlod_collapse_log *log, size_t c, femlod_collapse *out) {
     out->i = log->pair[2 * c];

@@ -11,6 +11,8 @@ struct femlod_collapse_log {
     size_t nv_in;        /* input vertices: node ids 0..nv_in-1 */
     size_t n, cap;       /* collapses; collapse c made node nv_in + c */
     size_t prephase;     /* the first `prephase` collapses were the stretch pre-phase */
+    size_t front;        /* the first `front` collapses made the output mesh (SIZE_MAX: all) */
+    int binding;         /* femlod_reject that stopped the last collapses; FEMLOD_REJECT_COUNT: none */
     uint32_t *pair;      /* 2n */
     double *pos;         /* 3n */
     double *e_size;      /* n */

@@ -244,6 +244,18 @@ void fl_lua_log(lua_State *L, const char *fmt, ...) {
     fflush(stderr);
 }
 
+void fl_lua_warn(lua_State *L, const char *fmt, ...) {
+    (void)L;
+    va_list ap;
+    fflush(stdout);
+    fputs(isatty(2) ? "\r\033[Kfemlod: warning: " : "femlod: warning: ", stderr);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+    fflush(stderr);
+}
+
 /* }==================================================================== */
 
 /* {====================================================================

@@ -129,6 +129,12 @@ __attribute__((format(printf, 2, 3)))
 #endif
 /* Prints "femlod: MESSAGE\n" on standard error (call when fl_lua_verbose). */
 FL_LUA_INTERNAL void fl_lua_log(lua_State *L, const char *fmt, ...);
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+/* Prints "femlod: warning: MESSAGE\n" on standard error, whatever the
+ * verbosity: a request that could not be met (rescale). */
+FL_LUA_INTERNAL void fl_lua_warn(lua_State *L, const char *fmt, ...);
 
 /* }====== */
 

@@ -51,7 +51,8 @@ static const char *const simplify_keys[] = {
     "target",         "ratio",          "tolerance",         "max_deviation",
     "min_stretch",    "max_size",       "max_valence",       "feature_angle",
     "feature_weight", "max_normal_change", "keep_boundary",  "area_weighted",
-    "fast_above",          "threads",        "lock",           "progress",       NULL};
+    "fast_above",          "threads",        "lock",           "progress",
+    "hierarchy_floor",     NULL};
 
 /* The thresholds of type double that `false` switches off, in the order of
  * femlod_simplify_options; max is the largest value allowed. */
@@ -168,6 +169,19 @@ const char *fl_simplify_read_options(lua_State *L, int idx, femlod_simplify_opti
         lua_Integer n = lua_tointegerx(L, -1, &isint);
         if (t != LUA_TNUMBER || !isint || n < 0 || n > 1024) return bad_value(L, "integer >= 0", NULL);
         o->threads = (int)n;
+    }
+    lua_pop(L, 1);
+
+    /* true: as coarse as the thresholds allow; false: stop at the target */
+    *key = "hierarchy_floor";
+    t = lua_getfield(L, idx, "hierarchy_floor");
+    if (t == LUA_TBOOLEAN) {
+        o->hierarchy_floor = lua_toboolean(L, -1) ? 1 : 0;
+    } else if (t != LUA_TNIL) {
+        int isint = 0;
+        lua_Integer n = lua_tointegerx(L, -1, &isint);
+        if (t != LUA_TNUMBER || !isint || n < 1) return bad_value(L, "integer >= 1 or boolean", NULL);
+        o->hierarchy_floor = (size_t)n;
     }
     lua_pop(L, 1);
 
@@ -307,6 +321,7 @@ static int lib_simplify(lua_State *L) {
     fl_opts o;
     fl_opts_open(&o, L, 2, simplify_keys);
     femlod_simplify_options so = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    so.hierarchy_floor = 1; /* the hierarchy reaches the coarsest mesh the thresholds allow */
     if (o.idx) {
         const char *key;
         const char *msg = fl_simplify_read_options(L, o.idx, &so, "false", &key);
@@ -795,12 +810,19 @@ static int hierarchy_rescale(lua_State *L) {
     h->busy = 0;
     fl_opts_progress_check(&o, &pc, st);
     if (st != FEMLOD_OK) return fl_lua_raise(L, &err);
+    size_t reached = femlod_hierarchy_front_triangles(h->hier);
     if (fl_lua_verbose(L))
         fl_lua_log(L, "rescale: %zu -> %zu triangles (target %zu), %zu operations (%.3f s)", before,
-                   femlod_hierarchy_front_triangles(h->hier), (size_t)target, ops,
-                   fl_lua_clock() - t0);
+                   reached, (size_t)target, ops, fl_lua_clock() - t0);
+    /* A count more than 0.5% away from the request is said, with why. */
+    const char *why = femlod_hierarchy_limit_reason(h->hier);
+    double off = fabs((double)reached - (double)target);
+    int missed = off > 0.005 * (double)target && off > 2.0;
+    if (missed) fl_lua_warn(L, "rescale: asked %zu, reached %zu: %s", (size_t)target, reached, why);
     lua_pushinteger(L, (lua_Integer)ops);
-    return 1;
+    lua_pushinteger(L, (lua_Integer)reached);
+    if (missed) lua_pushstring(L, why); else lua_pushnil(L);
+    return 3;
 }
 
 /* h:refine_curvature{ fine, coarse, map, radius, percentile }: curvature LOD
@@ -1223,6 +1245,13 @@ static int hierarchy_stats(lua_State *L) {
     lua_setfield(L, -2, "rejected");
     set_integer(L, "violating_input", r->violating_input);
     set_integer(L, "dropped_degenerate", r->dropped_degenerate);
+    set_integer(L, "hierarchy_triangles", r->hierarchy_triangles);
+    lua_pushstring(L, femlod_stop_reason_name(r->hierarchy_stop));
+    lua_setfield(L, -2, "hierarchy_stop");
+    if (r->hierarchy_binding >= 0 && r->hierarchy_binding < FEMLOD_REJECT_COUNT) {
+        lua_pushstring(L, femlod_reject_name((femlod_reject)r->hierarchy_binding));
+        lua_setfield(L, -2, "hierarchy_binding");
+    }
     lua_pushnumber(L, r->seconds);
     lua_setfield(L, -2, "seconds");
 
