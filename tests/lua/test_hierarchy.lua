@@ -780,9 +780,10 @@ do
   h:rescale { target = 2500 }
   T.eq(h:counts().triangles, 2500, "rescale to 2500: the count")
   T.eq(h:validate(), true, "valid after rescale")
-  -- below the simplification's result the coarsest front is the answer
+  -- below the coarsest front the coarsest is the answer (fandisk's
+  -- defaults allow nothing coarser than the target here)
   h:rescale { target = 10 }
-  T.eq(h:counts().triangles, base, "rescale below the coarsest: the simplification result")
+  T.eq(h:counts().triangles, h:stats().hierarchy_triangles, "rescale below the coarsest: the coarsest front")
   local env = { h = h }
   T.errmsg("code:1: bad argument #1 to 'rescale' (give exactly one of target and factor)",
     "h:rescale{ target = 3, factor = 2 }", env)
@@ -794,6 +795,86 @@ do
   T.errmsg("code:1: bad argument #1 to 'rescale' (target: must be an integer in 1..4294967295)",
     "h:rescale{ target = 0 }", env)
   T.errmsg("code:1: bad argument #1 to 'rescale' (table expected, got number)", "h:rescale(3)", env)
+end
+-- }======
+
+-- {====== the hierarchy below the target (docs/design.md "The hierarchy below the target")
+do
+  local cover <close> = femlod.load(P.shared .. "/cover.obj")
+  local opts = { target = 12000, tolerance = 0.15, min_stretch = 0.2, max_size = 15, max_valence = 12 }
+  local function with(t, k, v) local c = {} for a, b in pairs(t) do c[a] = b end c[k] = v return c end
+  local plain <close> = cover:simplify(with(opts, "hierarchy_floor", false))
+  local h <close> = cover:simplify(opts)
+  local S, PS = h:stats(), plain:stats()
+  -- the mesh at the target is the plain simplification's, byte for byte
+  T.eq(serial(h:mesh()), serial(plain:mesh()), "hierarchy_floor: the first front is the plain result")
+  T.eq(S.collapses, PS.collapses, "stats.collapses: those up to the target")
+  T.eq(PS.hierarchy_triangles, 12000, "hierarchy_floor = false: the log stops at the target")
+  T.check(h:collapses() > S.collapses, "the hierarchy goes on past the target: " .. h:collapses())
+  T.check(S.hierarchy_triangles < 6000, "to the coarsest mesh the thresholds allow: " .. S.hierarchy_triangles)
+  T.eq(S.hierarchy_stop, "no_valid_edge", "the extension stops where no edge is valid")
+  T.check(S.hierarchy_binding ~= nil, "and knows which check stopped it")
+  T.eq(h:validate(), true, "valid at the target")
+  print(string.format("cover -> 12000: %d collapses to the target, %d in the hierarchy, coarsest %d triangles (%s)",
+    S.collapses, h:collapses(), S.hierarchy_triangles, S.hierarchy_binding))
+
+  -- every threshold at every front visited: created triangles only (input
+  -- triangles are as they were); cover's input meets them
+  local function check_front(label)
+    local q = h:mesh():quality()
+    T.check(q.closed == cover:quality().closed and q.manifold, label .. ": closed and manifold as the input")
+    T.check(q.stretch_min >= 0.2 - 1e-12, label .. ": min stretch " .. q.stretch_min)
+    T.check(q.size_max <= 15 + 1e-9, label .. ": max size " .. q.size_max)
+    T.check(q.valence_max <= 12, label .. ": max valence " .. q.valence_max)
+    T.eq(h:validate(), true, label .. ": valid")
+  end
+
+  -- half the target: reached within 0.5%, no reason given
+  local ops, n, why = h:rescale { target = 6000 }
+  T.check(ops > 0 and math.abs(n - 6000) <= 30, "rescale to half the target: " .. n)
+  T.eq(why, nil, "no reason when the count is met")
+  T.eq(h:counts().triangles, n, "rescale returns the count reached")
+  check_front("rescaled to 6000")
+  -- below the coarsest: the coarsest, and why
+  ops, n, why = h:rescale { target = 100 }
+  T.eq(n, S.hierarchy_triangles, "rescale below the coarsest reaches the coarsest")
+  T.eq(why, S.hierarchy_binding, "and names the check that stopped the simplification")
+  check_front("coarsest")
+  T.eq(h:coarsen(huge), 0, "coarsen(math.huge) at the coarsest: nothing to collapse")
+  -- above the input: the input's count
+  ops, n, why = h:rescale { target = 200000 }
+  T.eq(n, cover:counts().triangles, "rescale above the input reaches the input")
+  T.eq(why, "the input's count", "and says so")
+  -- the card's recipe: simplify to 12k, refine curvature, rescale back
+  h:rescale { target = 12000 }
+  h:refine_curvature {}
+  check_front("refine_curvature below and above the target")
+  local fine = h:counts().triangles
+  T.check(fine > 30000, "refine_curvature from 12,000: " .. fine)
+  ops, n, why = h:rescale { target = 12000 }
+  T.check(math.abs(n - 12000) <= 60, "the recipe's rescale back: within 0.5% of 12,000: " .. n)
+  T.check(serial(h:mesh()) ~= serial(plain:mesh()), "the recipe does not give the plain simplification back")
+  check_front("the recipe's result")
+  -- region and coarsen below the target
+  h:rescale { target = 4000 }
+  h:refine_region { sphere = { center = { 0, 0, 0 }, radius = 20 }, size = 0 }
+  check_front("refine_region below the target")
+  -- a floor: the log stops there
+  local f <close> = cover:simplify(with(opts, "hierarchy_floor", 8000))
+  T.eq(f:stats().hierarchy_triangles, 8000, "hierarchy_floor = 8000: the log stops at 8000")
+  T.eq(f:stats().hierarchy_stop, "target", "at its floor")
+  f:rescale { target = 8000 }
+  T.eq(f:counts().triangles, 8000, "a floor is reachable")
+  -- saved and loaded: the whole hierarchy
+  h:rescale { target = 12000 }
+  h:save(tmp("below.flh"))
+  local g <close> = femlod.load_hierarchy(tmp("below.flh"))
+  T.eq(g:collapses(), h:collapses(), "the .flh keeps the whole hierarchy")
+  ops, n, why = g:rescale { target = 100 }
+  T.eq(n, S.hierarchy_triangles, "a loaded hierarchy reaches the coarsest")
+  T.eq(why, S.hierarchy_binding, "and knows why it stops there")
+  T.errmsg("code:1: bad argument #1 to 'simplify' (hierarchy_floor: integer >= 1 or boolean expected, got 0)",
+    "m:simplify { target = 10, hierarchy_floor = 0 }", { m = fandisk })
 end
 -- }======
 
