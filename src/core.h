@@ -217,9 +217,9 @@ FL_INTERNAL int fl_format_double_fit(char *buf, size_t size, double x, int width
 
 /* }====== */
 
-/* {====== readers and writers (io_*.c); io.c dispatches.
- * Each reader parses data[0..size) (data[size] == '\0' is guaranteed) and
- * names `name` in its messages. */
+/* {====== readers and writers (io_*.c); io.c dispatches to them, and the
+ * helpers they share are in io_util.h. Each reader parses data[0..size)
+ * (data[size] == '\0' is guaranteed) and names `name` in its messages. */
 
 FL_INTERNAL femlod_status fl_read_obj(femlod_mesh **out, const char *data, size_t size,
                                       const char *name, femlod_error *err);
@@ -248,37 +248,6 @@ FL_INTERNAL femlod_status fl_write_gltf(const femlod_mesh *m, FILE *fp, int bina
                                         const femlod_write_options *options, const char *path,
                                         femlod_error *err);
 
-/* Shared by the text readers (io.c). fl_io_quote copies token s[0..n) into buf
- * for a message: at most 40 bytes, bytes outside printable ASCII as '?', "..."
- * when cut; returns buf. fl_io_coord parses the token as a finite number; on
- * failure it writes the reason into why ("bad number 'x'", "coordinate 'nan'
- * is not finite", "coordinate '1e999' is out of range") and returns 0. */
-FL_INTERNAL const char *fl_io_quote(char *buf, size_t size, const char *s, size_t n);
-FL_INTERNAL int fl_io_coord(const char *s, size_t n, double *out, char *why, size_t why_size);
-
-/* A whitespace-separated token reader with line numbers (io.c), for the FE
- * formats. comment: the byte that starts a comment to the end of the line,
- * or 0. fl_text_next returns the next token on any line (NULL at the end,
- * where line names the file's last line); fl_text_fail fills err with
- * "name:line: message". fl_text_u64 parses an unsigned decimal token
- * (saturating at 2^60); fl_text_is compares a token with a word. */
-typedef struct fl_text {
-    const char *p, *end, *start;
-    const char *name;
-    size_t line;
-    femlod_error *err;
-    int eof;
-    char comment;
-} fl_text;
-
-FL_INTERNAL void fl_text_init(fl_text *t, const char *data, size_t size, const char *name,
-                              char comment, femlod_error *err);
-FL_INTERNAL const char *fl_text_next(fl_text *t, size_t *len);
-FL_INTERNAL femlod_status fl_text_fail(fl_text *t, femlod_status st, const char *fmt, ...)
-    FL_PRINTF(3, 4);
-FL_INTERNAL int fl_text_u64(const char *s, size_t n, uint64_t *v);
-FL_INTERNAL int fl_text_is(const char *s, size_t n, const char *word);
-
 /* The finite-element formats (io_msh.c, io_vtk.c, io_inp.c, io_medit.c).
  * The writers fill err on every failure and name path. */
 FL_INTERNAL femlod_status fl_read_msh(femlod_mesh **out, const char *data, size_t size,
@@ -294,20 +263,6 @@ FL_INTERNAL femlod_status fl_write_inp(const femlod_mesh *m, FILE *fp,
                                        femlod_error *err);
 FL_INTERNAL femlod_status fl_write_medit(const femlod_mesh *m, FILE *fp, const char *path,
                                          femlod_error *err);
-/* The boundary edges (sides of exactly one triangle) as 2*count vertex
- * indices, oriented as their triangle runs, in triangle order; caller frees.
- * A triangle listing an edge twice (a, b, a) counts it as one side. */
-FL_INTERNAL femlod_status fl_io_boundary_sides(const femlod_mesh *m, uint32_t **sides,
-                                               size_t *count, femlod_error *err);
-/* A reader's end: on st == FEMLOD_OK moves b into *out (ENOMEM names
- * name); frees b in every case and returns the outcome. */
-FL_INTERNAL femlod_status fl_io_finish(fl_meshbuf *b, femlod_status st, femlod_mesh **out,
-                                       const char *name, femlod_error *err);
-/* Fills err with "PATH: cannot write: <strerror(errno), EIO when 0>". */
-FL_INTERNAL femlod_status fl_io_write_error(const char *path, femlod_error *err);
-/* Writes x y z with the shortest round-trip digits, separated by sep, then
- * end; 0 on a write error. */
-FL_INTERNAL int fl_io_put_xyz(FILE *fp, const double *p, const char *sep, const char *end);
 
 /* }====== */
 

@@ -51,7 +51,7 @@
 #include <tiny_gltf.h>
 
 extern "C" {
-#include "core.h"
+#include "io_util.h"
 }
 
 namespace {

@@ -10,7 +10,7 @@
  * default), then the caller's node and element sets. No material, section or step: the file is
  * meant for *INCLUDE, INPUT=... from the analysis deck. Data lines hold at
  * most 10 ids, which keeps them under CalculiX's 132 characters. */
-#include "core.h"
+#include "io_util.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -9,7 +9,7 @@
  * element sections (Edges, Tetrahedra, Corners, Normals...) are skipped by
  * their known record sizes; quadrilaterals are refused (they would leave
  * holes), as are 2-D files and unknown keywords. */
-#include "core.h"
+#include "io_util.h"
 
 #include <stdlib.h>
 #include <string.h>

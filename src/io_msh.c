@@ -14,7 +14,7 @@
  * Writing: 4.1 (or 2.2) ASCII with node tags 1..nv, element tags 1..nt, one
  * surface entity (tag 1) in the physical group 1 "surface", so what gmsh
  * reads back is what femlod wrote. */
-#include "core.h"
+#include "io_util.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -169,6 +169,31 @@ static femlod_status need_end(msh_reader *r, const char *end, const char *after)
     if (!fl_text_is(s, n, end))
         return fl_text_fail(&r->t, FEMLOD_EPARSE, "expected '%s' after %s, found '%s'", end, after,
                             quote(q, sizeof q, s, n));
+    return FEMLOD_OK;
+}
+
+/* need_end after "N WHAT" (e.g. "12 nodes"). */
+static femlod_status need_end_after(msh_reader *r, const char *end, uint64_t n, const char *what) {
+    char after[64];
+    snprintf(after, sizeof after, "%llu %s", (unsigned long long)n, what);
+    return need_end(r, end, after);
+}
+
+/* The line that opens a 4.1 $Nodes or $Elements section: the block count,
+ * the item count and the smallest and largest tag; item is "node" or
+ * "element", for the messages. */
+static femlod_status need_v4_counts(msh_reader *r, const char *item, uint64_t *blocks,
+                                    uint64_t *count, uint64_t *lo, uint64_t *hi) {
+    char what[4][48];
+    snprintf(what[0], sizeof what[0], "%s block count", item);
+    snprintf(what[1], sizeof what[1], "%s count", item);
+    snprintf(what[2], sizeof what[2], "smallest %s tag", item);
+    snprintf(what[3], sizeof what[3], "largest %s tag", item);
+    uint64_t *v[4] = {blocks, count, lo, hi};
+    for (int k = 0; k < 4; k++) {
+        femlod_status st = need_u64(r, v[k], what[k]);
+        if (st != FEMLOD_OK) return st;
+    }
     return FEMLOD_OK;
 }
 
@@ -383,19 +408,13 @@ static femlod_status nodes_v2(msh_reader *r) {
             if ((st = need_coord(r, &c[k], tag)) != FEMLOD_OK) return st;
         if ((st = add_vertex(r, c)) != FEMLOD_OK) return st;
     }
-    char after[64];
-    snprintf(after, sizeof after, "%llu nodes", (unsigned long long)count);
-    return need_end(r, "$EndNodes", after);
+    return need_end_after(r, "$EndNodes", count, "nodes");
 }
 
 static femlod_status nodes_v4(msh_reader *r) {
     uint64_t blocks, count, lo, hi;
-    femlod_status st;
-    if ((st = need_u64(r, &blocks, "node block count")) != FEMLOD_OK ||
-        (st = need_u64(r, &count, "node count")) != FEMLOD_OK ||
-        (st = need_u64(r, &lo, "smallest node tag")) != FEMLOD_OK ||
-        (st = need_u64(r, &hi, "largest node tag")) != FEMLOD_OK)
-        return st;
+    femlod_status st = need_v4_counts(r, "node", &blocks, &count, &lo, &hi);
+    if (st != FEMLOD_OK) return st;
     if (count > UINT32_MAX)
         return fl_text_fail(&r->t, FEMLOD_ELIMIT, "%llu nodes declared (limit %u)",
                             (unsigned long long)count, (unsigned)UINT32_MAX);
@@ -448,9 +467,7 @@ static femlod_status nodes_v4(msh_reader *r) {
         return fl_text_fail(
             &r->t, FEMLOD_EPARSE, "header declares %llu nodes, its %llu blocks hold %llu",
             (unsigned long long)count, (unsigned long long)blocks, (unsigned long long)total);
-    char after[64];
-    snprintf(after, sizeof after, "%llu node blocks", (unsigned long long)blocks);
-    return need_end(r, "$EndNodes", after);
+    return need_end_after(r, "$EndNodes", blocks, "node blocks");
 }
 
 static femlod_status elements_v2(msh_reader *r) {
@@ -484,19 +501,13 @@ static femlod_status elements_v2(msh_reader *r) {
             if ((st = need_int(r, "element tag")) != FEMLOD_OK) return st;
         if ((st = element_nodes(r, type, mt)) != FEMLOD_OK) return st;
     }
-    char after[64];
-    snprintf(after, sizeof after, "%llu elements", (unsigned long long)count);
-    return need_end(r, "$EndElements", after);
+    return need_end_after(r, "$EndElements", count, "elements");
 }
 
 static femlod_status elements_v4(msh_reader *r) {
     uint64_t blocks, count, lo, hi;
-    femlod_status st;
-    if ((st = need_u64(r, &blocks, "element block count")) != FEMLOD_OK ||
-        (st = need_u64(r, &count, "element count")) != FEMLOD_OK ||
-        (st = need_u64(r, &lo, "smallest element tag")) != FEMLOD_OK ||
-        (st = need_u64(r, &hi, "largest element tag")) != FEMLOD_OK)
-        return st;
+    femlod_status st = need_v4_counts(r, "element", &blocks, &count, &lo, &hi);
+    if (st != FEMLOD_OK) return st;
     if (!fl_meshbuf_reserve(&r->b, r->b.nv, plausible(r, count, 8)))
         return fl_text_fail(&r->t, FEMLOD_ENOMEM, "out of memory for elements");
     uint64_t total = 0;
@@ -530,9 +541,7 @@ static femlod_status elements_v4(msh_reader *r) {
         return fl_text_fail(
             &r->t, FEMLOD_EPARSE, "header declares %llu elements, its %llu blocks hold %llu",
             (unsigned long long)count, (unsigned long long)blocks, (unsigned long long)total);
-    char after[64];
-    snprintf(after, sizeof after, "%llu element blocks", (unsigned long long)blocks);
-    return need_end(r, "$EndElements", after);
+    return need_end_after(r, "$EndElements", blocks, "element blocks");
 }
 
 /* {====== binary data: "FILE: byte N: message" */

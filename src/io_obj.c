@@ -6,7 +6,7 @@
  * ecosystem-notes.md 5.2 (relative indices resolve against the vertices read
  * so far, trimesh#2556 and TALOS-2020-1212; `\v` is whitespace, assimp
  * PR#6540; never read past the buffer, assimp #4234/#4770). */
-#include "core.h"
+#include "io_util.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -29,12 +29,11 @@ typedef struct obj_reader {
 
 static femlod_status fail(obj_reader *r, femlod_status st, const char *fmt, ...) FL_PRINTF(3, 4);
 static femlod_status fail(obj_reader *r, femlod_status st, const char *fmt, ...) {
-    char msg[FEMLOD_ERROR_MESSAGE_SIZE];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    st = fl_io_vfail_line(r->err, st, r->name, r->line, fmt, ap);
     va_end(ap);
-    return fl_error(r->err, st, "%s:%zu: %s", r->name, r->line, msg);
+    return st;
 }
 
 static int is_blank(char c) { return c == ' ' || c == '\t' || c == '\v' || c == '\f' || c == '\r'; }
@@ -116,11 +115,8 @@ static femlod_status read_vertex(obj_reader *r) {
         if (at_eos(r)) break;
         size_t n;
         const char *s = next_token(r, &n);
-        char *e;
-        char q[48];
-        fl_strtod(s, &e);
-        if (e != s + n)
-            return fail(r, FEMLOD_EPARSE, "bad number '%s'", fl_io_quote(q, sizeof q, s, n));
+        double x;
+        if (!fl_io_number(s, n, &x, why, sizeof why)) return fail(r, FEMLOD_EPARSE, "%s", why);
         if (extra == 4) return fail(r, FEMLOD_EPARSE, "too many values on a 'v' line (at most 7)");
     }
     end_statement(r);
@@ -168,8 +164,7 @@ static int parse_ref(const char *s, const char *e, long long *v) {
 
 static femlod_status read_face(obj_reader *r) {
     size_t face_line = r->line, first_tri = r->b.nt;
-    uint32_t first = 0, prev = 0;
-    size_t count = 0;
+    fl_io_fan fan = {0, 0, 0};
     int forward = 0;
     char q[48];
     for (;;) {
@@ -196,24 +191,16 @@ static femlod_status read_face(obj_reader *r) {
             v = (uint32_t)(idx - 1);
             if (v >= nv) forward = 1;
         }
-        count++;
-        if (count == 1) {
-            first = v;
-        } else if (count == 2) {
-            prev = v;
-        } else {
-            if (r->b.nt >= UINT32_MAX)
-                return fail(r, FEMLOD_ELIMIT, "too many triangles (limit %u)",
-                            (unsigned)UINT32_MAX);
-            if (!fl_meshbuf_add_triangle(&r->b, first, prev, v))
-                return fail(r, FEMLOD_ENOMEM, "out of memory at triangle %zu", r->b.nt + 1);
-            prev = v;
-        }
+        femlod_status st = fl_io_fan_add(&r->b, &fan, v);
+        if (st == FEMLOD_ELIMIT)
+            return fail(r, st, "too many triangles (limit %u)", (unsigned)UINT32_MAX);
+        if (st != FEMLOD_OK) return fail(r, st, "out of memory at triangle %zu", r->b.nt + 1);
     }
     end_statement(r);
-    if (count < 3) {
+    if (fan.count < 3) {
         r->line = face_line;
-        return fail(r, FEMLOD_EPARSE, "face has %zu vertices (at least 3 needed)", count);
+        return fail(r, FEMLOD_EPARSE, "face has %zu vertices (at least 3 needed)",
+                    (size_t)fan.count);
     }
     if (forward) {
         if (r->nfwd == r->cap_fwd) {
@@ -299,46 +286,22 @@ femlod_status fl_read_obj(femlod_mesh **out, const char *data, size_t size, cons
     r.err = err;
     femlod_status st = parse(&r);
     free(r.fwd);
-    if (st != FEMLOD_OK) {
-        fl_meshbuf_free(&r.b);
-        return st;
-    }
-    femlod_mesh *m = fl_meshbuf_finish(&r.b);
-    if (!m) {
-        fl_meshbuf_free(&r.b);
-        return fl_error(err, FEMLOD_ENOMEM, "%s: out of memory", name);
-    }
-    *out = m;
-    return FEMLOD_OK;
+    return fl_io_finish(&r.b, st, out, name, err);
 }
 
 /* {====== writer */
 
-static int put(FILE *fp, const char *s, size_t n) { return fwrite(s, 1, n, fp) == n; }
-
-/* "x y z" with the shortest round-trip forms; returns the length. */
-static size_t format_xyz(char *buf, const double *p) {
-    size_t n = 0;
-    for (int k = 0; k < 3; k++) {
-        if (k) buf[n++] = ' ';
-        int w = fl_format_double(buf + n, 32, p[k]);
-        n += w > 0 ? (size_t)w : 0;
-    }
-    buf[n] = '\0';
-    return n;
-}
-
 femlod_status fl_write_obj(const femlod_mesh *m, FILE *fp) {
-    char line[128];
+    char line[2 + FL_IO_XYZ_SIZE];
     if (fprintf(fp, "# femlod %s\n# %zu vertices, %zu triangles\n", FEMLOD_VERSION_STRING, m->nv,
                 m->nt) < 0)
         return FEMLOD_EIO;
     for (size_t i = 0; i < m->nv; i++) {
         line[0] = 'v';
         line[1] = ' ';
-        size_t n = 2 + format_xyz(line + 2, m->pos + 3 * i);
+        size_t n = 2 + fl_io_format_xyz(line + 2, m->pos + 3 * i);
         line[n++] = '\n';
-        if (!put(fp, line, n)) return FEMLOD_EIO;
+        if (fwrite(line, 1, n, fp) != n) return FEMLOD_EIO;
     }
     for (size_t i = 0; i < m->nt; i++) {
         const uint32_t *t = m->tri + 3 * i;

@@ -7,7 +7,7 @@
  * fan-triangulated; other properties and elements are skipped. Header
  * errors are "FILE:LINE:", binary data errors "FILE: byte N:". Declared
  * counts are compared with the bytes present before anything is reserved. */
-#include "core.h"
+#include "io_util.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -57,7 +57,7 @@ typedef struct ply_reader {
     const char *name;
     size_t line;
     femlod_error *err;
-    int encoding, eof;
+    int encoding;
     ply_elem *elems;
     size_t nelems, cap_elems;
     ply_prop *props;
@@ -69,23 +69,20 @@ typedef struct ply_reader {
 static femlod_status fail_line(ply_reader *r, size_t line, femlod_status st, const char *fmt, ...)
     FL_PRINTF(4, 5);
 static femlod_status fail_line(ply_reader *r, size_t line, femlod_status st, const char *fmt, ...) {
-    char msg[FEMLOD_ERROR_MESSAGE_SIZE];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    st = fl_io_vfail_line(r->err, st, r->name, line, fmt, ap);
     va_end(ap);
-    return fl_error(r->err, st, "%s:%zu: %s", r->name, line, msg);
+    return st;
 }
 
 static femlod_status fail_byte(ply_reader *r, const char *at, const char *fmt, ...) FL_PRINTF(3, 4);
 static femlod_status fail_byte(ply_reader *r, const char *at, const char *fmt, ...) {
-    char msg[FEMLOD_ERROR_MESSAGE_SIZE];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    femlod_status st = fl_io_vfail_byte(r->err, r->name, (size_t)(at - r->data), fmt, ap);
     va_end(ap);
-    return fl_error(r->err, FEMLOD_EPARSE, "%s: byte %zu: %s", r->name, (size_t)(at - r->data),
-                    msg);
+    return st;
 }
 
 static int is_blank(char c) { return c == ' ' || c == '\t' || c == '\v' || c == '\f' || c == '\r'; }
@@ -116,17 +113,6 @@ static ply_type parse_type(const char *s, size_t n) {
     for (size_t i = 0; i < sizeof type_names / sizeof type_names[0]; i++)
         if (word_is(s, n, type_names[i].name)) return type_names[i].type;
     return T_NONE;
-}
-
-static int parse_u64(const char *s, size_t n, uint64_t *v) {
-    if (n == 0) return 0;
-    uint64_t x = 0;
-    for (size_t i = 0; i < n; i++) {
-        if (s[i] < '0' || s[i] > '9') return 0;
-        if (x < (UINT64_C(1) << 40)) x = x * 10 + (uint64_t)(s[i] - '0');
-    }
-    *v = x;
-    return 1;
 }
 
 static int grow(void **p, size_t *cap, size_t n, size_t elem) {
@@ -238,7 +224,7 @@ static femlod_status read_header(ply_reader *r) {
             uint64_t count;
             if (n != 3)
                 return fail_line(r, r->line, FEMLOD_EPARSE, "expected 'element NAME COUNT'");
-            if (!parse_u64(tok[2], len[2], &count))
+            if (!fl_io_uint(tok[2], len[2], UINT64_C(1) << 40, &count))
                 return fail_line(r, r->line, FEMLOD_EPARSE, "bad element count '%s'",
                                  fl_io_quote(q, sizeof q, tok[2], len[2]));
             if (!grow((void **)&r->elems, &r->cap_elems, r->nelems, sizeof *r->elems))
@@ -320,26 +306,6 @@ static femlod_status assign_roles(ply_reader *r) {
 
 /* {====== data, shared */
 
-/* A face being read: corners arrive one by one and become a fan from the first. */
-typedef struct fan {
-    uint32_t first, prev;
-    uint64_t count;
-} fan;
-
-static int fan_add(ply_reader *r, fan *f, uint32_t v) {
-    f->count++;
-    if (f->count == 1) {
-        f->first = v;
-    } else if (f->count == 2) {
-        f->prev = v;
-    } else {
-        if (r->b.nt >= UINT32_MAX || !fl_meshbuf_add_triangle(&r->b, f->first, f->prev, v))
-            return 0;
-        f->prev = v;
-    }
-    return 1;
-}
-
 static femlod_status add_vertex(ply_reader *r, const double c[3]) {
     if (!fl_meshbuf_add_vertex(&r->b, c[0], c[1], c[2]))
         return fl_error(r->err, FEMLOD_ENOMEM, "%s: out of memory", r->name);
@@ -349,26 +315,6 @@ static femlod_status add_vertex(ply_reader *r, const double c[3]) {
 /* }====== */
 
 /* {====== ascii data */
-
-static const char *token(ply_reader *r, size_t *len) {
-    const char *p = r->p, *end = r->end;
-    while (p < end && (is_blank(*p) || *p == '\n')) {
-        if (*p == '\n') r->line++;
-        p++;
-    }
-    if (p == end) {
-        /* Name the file's last line, not the empty one after its final newline. */
-        if (!r->eof && end > r->data && end[-1] == '\n') r->line--;
-        r->eof = 1;
-        r->p = end;
-        return NULL;
-    }
-    const char *s = p;
-    while (p < end && !is_blank(*p) && *p != '\n') p++;
-    *len = (size_t)(p - s);
-    r->p = p;
-    return s;
-}
 
 /* An integer of type t (range checked); 0 on a malformed or out-of-range token. */
 static int ascii_int(const char *s, size_t n, ply_type t, long long *v) {
@@ -389,14 +335,18 @@ static int ascii_int(const char *s, size_t n, ply_type t, long long *v) {
     return 1;
 }
 
-static femlod_status ascii_end(ply_reader *r, const ply_elem *e, uint64_t item) {
+static femlod_status ascii_end(ply_reader *r, size_t line, const ply_elem *e, uint64_t item) {
     char q[48];
-    return fail_line(r, r->line, FEMLOD_EPARSE, "file ends inside element '%s' (item %llu of %llu)",
+    return fail_line(r, line, FEMLOD_EPARSE, "file ends inside element '%s' (item %llu of %llu)",
                      fl_io_quote(q, sizeof q, e->name, e->name_len), (unsigned long long)item + 1,
                      (unsigned long long)e->count);
 }
 
 static femlod_status read_ascii(ply_reader *r) {
+    /* Tokens on any line, no comments; the last line is counted from the
+     * file's start, so an empty data section names the end_header line. */
+    fl_text t = {.p = r->p, .end = r->end, .start = r->data, .name = r->name, .line = r->line,
+                 .err = r->err};
     char q[48], why[128];
     size_t n;
     const char *s;
@@ -405,60 +355,53 @@ static femlod_status read_ascii(ply_reader *r) {
         const ply_prop *props = r->props + e->first_prop;
         if (e->nprops == 0) continue; /* items without data: nothing to read */
         /* Every value takes at least a digit and a separator. */
-        uint64_t left = (uint64_t)(r->end - r->p);
+        uint64_t left = (uint64_t)(t.end - t.p);
         if (e->nprops && e->count > (left + 1) / (2 * (uint64_t)e->nprops))
             return fail_line(r, e->line, FEMLOD_EPARSE,
                              "element '%s' declares %llu items, but only %llu bytes of data follow",
                              fl_io_quote(q, sizeof q, e->name, e->name_len),
                              (unsigned long long)e->count, (unsigned long long)left);
         for (uint64_t it = 0; it < e->count; it++) {
-            double c[3] = {0, 0, 0};
+            double c[3] = {0, 0, 0}, x;
             int is_vertex = 0;
             for (size_t pi = 0; pi < e->nprops; pi++) {
                 const ply_prop *pr = &props[pi];
-                if (!(s = token(r, &n))) return ascii_end(r, e, it);
+                if (!(s = fl_text_next(&t, &n))) return ascii_end(r, t.line, e, it);
                 if (pr->count_type == T_NONE) {
                     if (pr->role >= R_X && pr->role <= R_Z) {
                         if (!fl_io_coord(s, n, &c[pr->role - R_X], why, sizeof why))
-                            return fail_line(r, r->line, FEMLOD_EPARSE, "%s", why);
+                            return fail_line(r, t.line, FEMLOD_EPARSE, "%s", why);
                         is_vertex = 1;
-                    } else {
-                        char *end;
-                        fl_strtod(s, &end);
-                        if (end != s + n)
-                            return fail_line(r, r->line, FEMLOD_EPARSE, "bad number '%s'",
-                                             fl_io_quote(q, sizeof q, s, n));
+                    } else if (!fl_io_number(s, n, &x, why, sizeof why)) {
+                        return fail_line(r, t.line, FEMLOD_EPARSE, "%s", why);
                     }
                     continue;
                 }
                 long long count;
                 if (!ascii_int(s, n, pr->count_type, &count) || count < 0)
-                    return fail_line(r, r->line, FEMLOD_EPARSE, "bad list count '%s'",
+                    return fail_line(r, t.line, FEMLOD_EPARSE, "bad list count '%s'",
                                      fl_io_quote(q, sizeof q, s, n));
                 if (pr->role == R_INDICES && count < 3)
-                    return fail_line(r, r->line, FEMLOD_EPARSE,
+                    return fail_line(r, t.line, FEMLOD_EPARSE,
                                      "face has %lld vertices (at least 3 needed)", count);
-                fan f = {0, 0, 0};
+                fl_io_fan f = {0, 0, 0};
                 for (long long j = 0; j < count; j++) {
-                    if (!(s = token(r, &n))) return ascii_end(r, e, it);
+                    if (!(s = fl_text_next(&t, &n))) return ascii_end(r, t.line, e, it);
                     if (pr->role != R_INDICES) {
-                        char *end;
-                        fl_strtod(s, &end);
-                        if (end != s + n)
-                            return fail_line(r, r->line, FEMLOD_EPARSE, "bad number '%s'",
-                                             fl_io_quote(q, sizeof q, s, n));
+                        if (!fl_io_number(s, n, &x, why, sizeof why))
+                            return fail_line(r, t.line, FEMLOD_EPARSE, "%s", why);
                         continue;
                     }
                     long long v;
                     if (!ascii_int(s, n, pr->type, &v))
-                        return fail_line(r, r->line, FEMLOD_EPARSE, "bad face index '%s'",
+                        return fail_line(r, t.line, FEMLOD_EPARSE, "bad face index '%s'",
                                          fl_io_quote(q, sizeof q, s, n));
                     if (v < 0 || (uint64_t)v >= r->nv)
-                        return fail_line(r, r->line, FEMLOD_EPARSE,
+                        return fail_line(r, t.line, FEMLOD_EPARSE,
                                          "face index %lld out of range (%llu vertices)", v,
                                          (unsigned long long)r->nv);
-                    if (!fan_add(r, &f, (uint32_t)v))
-                        return fail_line(r, r->line, FEMLOD_ENOMEM, "out of memory");
+                    if (fl_io_fan_add(&r->b, &f, (uint32_t)v) != FEMLOD_OK)
+                        return fail_line(r, t.line, FEMLOD_ENOMEM, "out of memory");
                 }
             }
             if (is_vertex) {
@@ -467,8 +410,8 @@ static femlod_status read_ascii(ply_reader *r) {
             }
         }
     }
-    if ((s = token(r, &n)))
-        return fail_line(r, r->line, FEMLOD_EPARSE, "data after the last element: '%s'",
+    if ((s = fl_text_next(&t, &n)))
+        return fail_line(r, t.line, FEMLOD_EPARSE, "data after the last element: '%s'",
                          fl_io_quote(q, sizeof q, s, n));
     return FEMLOD_OK;
 }
@@ -582,14 +525,14 @@ static femlod_status read_binary(ply_reader *r) {
                     pos += (size_t)bytes;
                     continue;
                 }
-                fan f = {0, 0, 0};
+                fl_io_fan f = {0, 0, 0};
                 for (long long j = 0; j < count; j++, pos += ts) {
                     long long v = load_int(base + pos, pr->type, big);
                     if (v < 0 || (uint64_t)v >= r->nv)
                         return fail_byte(r, r->data + pos,
                                          "face index %lld out of range (%llu vertices)", v,
                                          (unsigned long long)r->nv);
-                    if (!fan_add(r, &f, (uint32_t)v))
+                    if (fl_io_fan_add(&r->b, &f, (uint32_t)v) != FEMLOD_OK)
                         return fl_error(r->err, FEMLOD_ENOMEM, "%s: out of memory", r->name);
                 }
             }
@@ -635,31 +578,10 @@ femlod_status fl_read_ply(femlod_mesh **out, const char *data, size_t size, cons
     if (st == FEMLOD_OK && r.b.nv != r.nv)
         st = fl_error(err, FEMLOD_EPARSE, "%s: read %zu of %llu vertices", name, r.b.nv,
                       (unsigned long long)r.nv);
-    if (st != FEMLOD_OK) {
-        fl_meshbuf_free(&r.b);
-        return st;
-    }
-    femlod_mesh *m = fl_meshbuf_finish(&r.b);
-    if (!m) {
-        fl_meshbuf_free(&r.b);
-        return fl_error(err, FEMLOD_ENOMEM, "%s: out of memory", name);
-    }
-    *out = m;
-    return FEMLOD_OK;
+    return fl_io_finish(&r.b, st, out, name, err);
 }
 
 /* {====== writers */
-
-static size_t format_xyz(char *buf, const double *p) {
-    size_t n = 0;
-    for (int k = 0; k < 3; k++) {
-        if (k) buf[n++] = ' ';
-        int w = fl_format_double(buf + n, 32, p[k]);
-        n += w > 0 ? (size_t)w : 0;
-    }
-    buf[n] = '\0';
-    return n;
-}
 
 static void put_le(unsigned char *p, uint64_t v, size_t n) {
     for (size_t i = 0; i < n; i++) p[i] = (unsigned char)(v >> (8 * i));
@@ -689,19 +611,7 @@ femlod_status fl_write_ply(const femlod_mesh *m, FILE *fp, int binary) {
         }
         return FEMLOD_OK;
     }
-    char line[128];
-    for (size_t i = 0; i < m->nv; i++) {
-        size_t n = format_xyz(line, m->pos + 3 * i);
-        line[n++] = '\n';
-        if (fwrite(line, 1, n, fp) != n) return FEMLOD_EIO;
-    }
-    for (size_t i = 0; i < m->nt; i++) {
-        const uint32_t *t = m->tri + 3 * i;
-        if (fprintf(fp, "3 %lu %lu %lu\n", (unsigned long)t[0], (unsigned long)t[1],
-                    (unsigned long)t[2]) < 0)
-            return FEMLOD_EIO;
-    }
-    return FEMLOD_OK;
+    return fl_io_put_vertex_face_lines(m, fp);
 }
 
 /* }====== */

@@ -6,7 +6,7 @@
  * 80-byte header starts with "solid" (meshio#530, sreiter/stl_reader#3).
  * STL shares no vertices, so corners are welded by fl_mesh_from_soup
  * (positions that compare equal become one vertex). */
-#include "core.h"
+#include "io_util.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -20,12 +20,11 @@ static femlod_status fail_at(femlod_error *err, const char *name, size_t byte, c
     FL_PRINTF(4, 5);
 static femlod_status fail_at(femlod_error *err, const char *name, size_t byte, const char *fmt,
                              ...) {
-    char msg[FEMLOD_ERROR_MESSAGE_SIZE];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    femlod_status st = fl_io_vfail_byte(err, name, byte, fmt, ap);
     va_end(ap);
-    return fl_error(err, FEMLOD_EPARSE, "%s: byte %zu: %s", name, byte, msg);
+    return st;
 }
 
 static uint32_t get_u32le(const unsigned char *p) {
@@ -85,49 +84,19 @@ static femlod_status read_binary(femlod_mesh **out, const unsigned char *data, s
 
 /* }====== */
 
-/* {====== ASCII */
+/* {====== ASCII: tokens on any line, no comments (fl_text with comment 0) */
 
-typedef struct stl_text {
-    const char *p, *end, *start;
-    const char *name;
-    size_t line;
-    femlod_error *err;
-    int eof;
-} stl_text;
-
-static femlod_status fail_line(stl_text *r, const char *fmt, ...) FL_PRINTF(2, 3);
-static femlod_status fail_line(stl_text *r, const char *fmt, ...) {
-    char msg[FEMLOD_ERROR_MESSAGE_SIZE];
+static femlod_status fail_line(fl_text *r, const char *fmt, ...) FL_PRINTF(2, 3);
+static femlod_status fail_line(fl_text *r, const char *fmt, ...) {
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(msg, sizeof msg, fmt, ap);
+    femlod_status st = fl_io_vfail_line(r->err, FEMLOD_EPARSE, r->name, r->line, fmt, ap);
     va_end(ap);
-    return fl_error(r->err, FEMLOD_EPARSE, "%s:%zu: %s", r->name, r->line, msg);
+    return st;
 }
 
 static int is_space(char c) {
     return c == ' ' || c == '\t' || c == '\v' || c == '\f' || c == '\r' || c == '\n';
-}
-
-/* The next whitespace-separated token (any line); NULL at the end. */
-static const char *token(stl_text *r, size_t *len) {
-    const char *p = r->p, *end = r->end;
-    while (p < end && is_space(*p)) {
-        if (*p == '\n') r->line++;
-        p++;
-    }
-    if (p == end) {
-        /* Name the file's last line, not the empty one after its final newline. */
-        if (!r->eof && end > r->start && end[-1] == '\n') r->line--;
-        r->eof = 1;
-        r->p = p;
-        return NULL;
-    }
-    const char *s = p;
-    while (p < end && !is_space(*p)) p++;
-    *len = (size_t)(p - s);
-    r->p = p;
-    return s;
 }
 
 static int keyword_is(const char *s, size_t n, const char *kw) {
@@ -142,9 +111,9 @@ static int keyword_is(const char *s, size_t n, const char *kw) {
 }
 
 /* The keyword kw must come next (case-insensitive, as some exporters shout). */
-static femlod_status expect(stl_text *r, const char *kw) {
+static femlod_status expect(fl_text *r, const char *kw) {
     size_t n;
-    const char *s = token(r, &n);
+    const char *s = fl_text_next(r, &n);
     char q[48];
     if (!s) return fail_line(r, "expected '%s', found the end of the file", kw);
     if (!keyword_is(s, n, kw))
@@ -155,7 +124,7 @@ static femlod_status expect(stl_text *r, const char *kw) {
 /* Skips a solid's name: the rest of the line, unless a keyword that may
  * follow it (`stop`, or "facet") shows up there, as in files written on
  * one line. */
-static void skip_name(stl_text *r, const char *stop) {
+static void skip_name(fl_text *r, const char *stop) {
     const char *p = r->p, *end = r->end;
     for (;;) {
         while (p < end && *p != '\n' && is_space(*p)) p++;
@@ -171,33 +140,29 @@ static void skip_name(stl_text *r, const char *stop) {
     r->p = p;
 }
 
-static femlod_status read_number(stl_text *r, double *x, int finite) {
+static femlod_status read_number(fl_text *r, double *x, int finite) {
     size_t n;
-    const char *s = token(r, &n);
+    const char *s = fl_text_next(r, &n);
     if (!s) return fail_line(r, "expected a number, found the end of the file");
     char why[128];
     if (finite) {
         if (!fl_io_coord(s, n, x, why, sizeof why)) return fail_line(r, "%s", why);
         return FEMLOD_OK;
     }
-    char *e;
-    *x = fl_strtod(s, &e);
-    if (e != s + n) {
-        char q[48];
-        return fail_line(r, "bad number '%s'", fl_io_quote(q, sizeof q, s, n));
-    }
+    if (!fl_io_number(s, n, x, why, sizeof why)) return fail_line(r, "%s", why);
     return FEMLOD_OK;
 }
 
 static femlod_status read_ascii(femlod_mesh **out, const char *data, size_t size, const char *name,
                                 femlod_error *err) {
-    stl_text r = {data, data + size, data, name, 1, err, 0};
+    fl_text r;
+    fl_text_init(&r, data, size, name, 0, err); /* skips the byte order mark */
     fl_meshbuf soup; /* three "vertices" per triangle: the corners */
     memset(&soup, 0, sizeof soup);
     femlod_status st = FEMLOD_OK;
     size_t n;
     char q[48];
-    const char *s = token(&r, &n);
+    const char *s = fl_text_next(&r, &n);
     if (!s) return fl_error(err, FEMLOD_EPARSE, "%s: empty file", name);
     /* Several solids in one file occur (concatenated parts): read them all. */
     while (s && st == FEMLOD_OK) {
@@ -207,7 +172,7 @@ static femlod_status read_ascii(femlod_mesh **out, const char *data, size_t size
         }
         skip_name(&r, "endsolid");
         for (;;) {
-            s = token(&r, &n);
+            s = fl_text_next(&r, &n);
             if (!s) {
                 st = fail_line(&r, "expected 'facet' or 'endsolid', found the end of the file");
                 break;
@@ -247,7 +212,7 @@ static femlod_status read_ascii(femlod_mesh **out, const char *data, size_t size
             if ((st = expect(&r, "endloop")) != FEMLOD_OK) break;
             if ((st = expect(&r, "endfacet")) != FEMLOD_OK) break;
         }
-        if (st == FEMLOD_OK) s = token(&r, &n);
+        if (st == FEMLOD_OK) s = fl_text_next(&r, &n);
     }
     if (st == FEMLOD_OK) st = fl_mesh_from_soup(out, soup.pos, soup.nv / 3, err);
     fl_meshbuf_free(&soup);
@@ -305,11 +270,8 @@ femlod_status fl_read_stl(femlod_mesh **out, const char *data, size_t size, cons
                            size);
         }
     }
-    /* Sizes are taken after the BOM is gone (assimp#6877). */
-    if (size >= 3 && memcmp(data, "\xEF\xBB\xBF", 3) == 0) {
-        data += 3;
-        size -= 3;
-    }
+    /* Sizes are taken after the BOM is gone (assimp#6877): fl_text_init
+     * skips it. */
     return read_ascii(out, data, size, name, err);
 }
 
@@ -342,17 +304,6 @@ static void facet_normal(const femlod_mesh *m, size_t t, double nrm[3]) {
     for (int k = 0; k < 3; k++) nrm[k] = len > 0.0 && isfinite(len) ? nrm[k] / len : 0.0;
 }
 
-static size_t format_xyz(char *buf, const double *p) {
-    size_t n = 0;
-    for (int k = 0; k < 3; k++) {
-        if (k) buf[n++] = ' ';
-        int w = fl_format_double(buf + n, 32, p[k]);
-        n += w > 0 ? (size_t)w : 0;
-    }
-    buf[n] = '\0';
-    return n;
-}
-
 static femlod_status write_binary(const femlod_mesh *m, FILE *fp) {
     unsigned char head[STL_PREFIX];
     memset(head, 0, sizeof head);
@@ -376,15 +327,15 @@ static femlod_status write_binary(const femlod_mesh *m, FILE *fp) {
 }
 
 static femlod_status write_ascii(const femlod_mesh *m, FILE *fp) {
-    char buf[128];
+    char buf[FL_IO_XYZ_SIZE];
     if (fputs("solid femlod\n", fp) == EOF) return FEMLOD_EIO;
     for (size_t t = 0; t < m->nt; t++) {
         double nrm[3];
         facet_normal(m, t, nrm);
-        format_xyz(buf, nrm);
+        fl_io_format_xyz(buf, nrm);
         if (fprintf(fp, "  facet normal %s\n    outer loop\n", buf) < 0) return FEMLOD_EIO;
         for (int v = 0; v < 3; v++) {
-            format_xyz(buf, m->pos + 3 * (size_t)m->tri[3 * t + (size_t)v]);
+            fl_io_format_xyz(buf, m->pos + 3 * (size_t)m->tri[3 * t + (size_t)v]);
             if (fprintf(fp, "      vertex %s\n", buf) < 0) return FEMLOD_EIO;
         }
         if (fputs("    endloop\n  endfacet\n", fp) == EOF) return FEMLOD_EIO;

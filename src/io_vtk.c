@@ -7,7 +7,7 @@
  * Written: the points (shortest round-trip doubles), the triangles as
  * VTK_TRIANGLE (5) cells with 0-based indices, CELL_DATA "stretch" and
  * "size" (femlod_triangle_stretch/_size) and POINT_DATA "valence". */
-#include "core.h"
+#include "io_util.h"
 
 #include <stdlib.h>
 

@@ -10,6 +10,7 @@
  * locale: number conversion of name=value pairs (lua_stringtonumber) and all
  * number printing are locale independent.
  */
+#include "cliutil.h"
 #include "lua/lfemlod.h"
 #include "sandbox.h"
 #include "sweep.h"
@@ -22,9 +23,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define PROGNAME "femlod"
+#define PROGNAME FL_CLI_PROGNAME
 
-enum { EXIT_OK = 0, EXIT_ERROR = 1, EXIT_USAGE = 2, EXIT_LIMIT = 3 };
+enum { EXIT_OK = 0, EXIT_ERROR = 1, EXIT_USAGE = FL_CLI_EXIT_USAGE, EXIT_LIMIT = 3 };
 
 typedef enum command {
     CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY, CMD_LOD, CMD_SWEEP, CMD_REPORT,
@@ -118,38 +119,6 @@ static void usage_text(FILE *f) {
           f);
 }
 
-/* A usage error: one line naming the problem, one pointing at the help. */
-#if defined(__GNUC__)
-__attribute__((format(printf, 1, 0)))
-#endif
-static void usage_errorv(const char *fmt, va_list ap) {
-    fputs(PROGNAME ": ", stderr);
-    vfprintf(stderr, fmt, ap);
-    fputs("\nusage: " PROGNAME " [options] COMMAND [ARGS] [name=value ...]"
-          " (try '" PROGNAME " --help')\n",
-          stderr);
-    fflush(stderr);
-}
-
-#if defined(__GNUC__)
-__attribute__((format(printf, 1, 2)))
-#endif
-static int usage_error(const char *fmt, ...) {
-    va_list ap;
-    va_start(ap, fmt);
-    usage_errorv(fmt, ap);
-    va_end(ap);
-    return EXIT_USAGE;
-}
-
-int fl_cli_usage_error(const char *fmt, ...) {
-    va_list ap;
-    va_start(ap, fmt);
-    usage_errorv(fmt, ap);
-    va_end(ap);
-    return EXIT_USAGE;
-}
-
 static void print_version(void) {
     printf(PROGNAME " " FEMLOD_VERSION_STRING " (" LUA_RELEASE ")\n");
 }
@@ -165,7 +134,7 @@ static int parse_seed(lua_State *L, cli *c, const char *s) {
         c->seed = lua_tointegerx(L, -1, &isint);
         lua_pop(L, 1);
     }
-    if (!isint) return usage_error("--seed: integer expected, got '%s'", s);
+    if (!isint) return fl_cli_usage_error("--seed: integer expected, got '%s'", s);
     return EXIT_OK;
 }
 
@@ -185,13 +154,14 @@ static int sandbox_option(cli *c, int *i) {
         if (strncmp(a, named[k], n) != 0 || (a[n] != '\0' && a[n] != '=')) continue;
         const char *v = a + n + 1;
         if (a[n] == '\0') {
-            if (*i + 1 >= c->argc) return usage_error("%s needs a value", named[k]);
+            if (*i + 1 >= c->argc) return fl_cli_usage_error("%s needs a value", named[k]);
             v = c->argv[++*i];
         }
         const char *msg = k == 0 ? fl_sandbox_allow(sb, v)
                         : k == 1 ? fl_sandbox_max_memory(sb, v)
                                  : fl_sandbox_max_time(sb, v);
-        if (msg) return k == 0 ? usage_error("%s", msg) : usage_error("%s '%s'", msg, v);
+        if (msg)
+            return k == 0 ? fl_cli_usage_error("%s", msg) : fl_cli_usage_error("%s '%s'", msg, v);
         return -1;
     }
     return -2;
@@ -232,12 +202,12 @@ static int parse_args(lua_State *L, cli *c) {
             if (a[8] == '=') {
                 c->record = a + 9;
             } else {
-                if (i + 1 >= c->argc) return usage_error("%s needs a value", a);
+                if (i + 1 >= c->argc) return fl_cli_usage_error("%s needs a value", a);
                 c->record = c->argv[++i];
             }
-            if (!*c->record) return usage_error("--record: file name expected, got ''");
+            if (!*c->record) return fl_cli_usage_error("--record: file name expected, got ''");
         } else if (strcmp(a, "--seed") == 0) {
-            if (i + 1 >= c->argc) return usage_error("%s needs a value", a);
+            if (i + 1 >= c->argc) return fl_cli_usage_error("%s needs a value", a);
             int st = parse_seed(L, c, c->argv[++i]);
             if (st != EXIT_OK) return st;
         } else if (strncmp(a, "--seed=", 7) == 0) {
@@ -245,12 +215,13 @@ static int parse_args(lua_State *L, cli *c) {
             if (st != EXIT_OK) return st;
         } else {
             int st = sandbox_option(c, &i);
-            if (st == -2) return usage_error("unknown option '%s'", a);
+            if (st == -2) return fl_cli_usage_error("unknown option '%s'", a);
             if (st >= 0) return st;
         }
     }
-    if (c->quiet && c->verbose) return usage_error("--quiet and --verbose exclude each other");
-    if (i >= c->argc) return usage_error("no command given");
+    if (c->quiet && c->verbose)
+        return fl_cli_usage_error("--quiet and --verbose exclude each other");
+    if (i >= c->argc) return fl_cli_usage_error("no command given");
 
     const char *w = c->argv[i];
     int need = 1; /* operands after the command word */
@@ -267,7 +238,7 @@ static int parse_args(lua_State *L, cli *c) {
             }
             i++;
             int st = sandbox_option(c, &i);
-            if (st == -2) return usage_error("unknown option '%s'", c->argv[i]);
+            if (st == -2) return fl_cli_usage_error("unknown option '%s'", c->argv[i]);
             if (st >= 0) return st;
         }
     } else if (strcmp(w, "info") == 0) {
@@ -296,7 +267,7 @@ static int parse_args(lua_State *L, cli *c) {
         need = 0;
         i--;              /* the word itself is the operand */
     } else {
-        return usage_error("unknown command '%s'", w);
+        return fl_cli_usage_error("unknown command '%s'", w);
     }
     c->operand = i + 1;
     if (c->operand + need > c->argc) {
@@ -306,15 +277,16 @@ static int parse_args(lua_State *L, cli *c) {
                                            "a hierarchy file and an output file",
                                            "a recipe", "a mesh file",
                                            "an input and an output file"};
-        return usage_error("missing %s", what[c->cmd]);
+        return fl_cli_usage_error("missing %s", what[c->cmd]);
     }
     c->pairs = c->operand + (need ? need : 1);
     const char *confine = fl_sandbox_confines(fl_sandbox_get());
     if (confine && c->cmd != CMD_RUN && c->cmd != CMD_EVAL)
-        return usage_error("%s applies to run and -e only", confine);
-    if (confine && strcmp(confine, "--allow") == 0) return usage_error("--allow needs --sandbox");
+        return fl_cli_usage_error("%s applies to run and -e only", confine);
+    if (confine && strcmp(confine, "--allow") == 0)
+        return fl_cli_usage_error("--allow needs --sandbox");
     c->script = c->cmd == CMD_RUN ? c->operand : 0;
-    if (c->record && c->cmd != CMD_RUN) return usage_error("--record goes with run only");
+    if (c->record && c->cmd != CMD_RUN) return fl_cli_usage_error("--record goes with run only");
     return -1;
 }
 
@@ -335,11 +307,11 @@ static int push_pairs(lua_State *L, const cli *c) {
     for (int i = c->pairs; i < c->argc; i++) {
         const char *a = c->argv[i];
         const char *eq = strchr(a, '=');
-        if (!eq || eq == a) return usage_error("expected name=value, got '%s'", a);
+        if (!eq || eq == a) return fl_cli_usage_error("expected name=value, got '%s'", a);
         lua_pushlstring(L, a, (size_t)(eq - a));
         if (lua_rawget(L, -2) != LUA_TNIL) {
             lua_pop(L, 1);
-            return usage_error("parameter given twice: '%s'", a);
+            return fl_cli_usage_error("parameter given twice: '%s'", a);
         }
         lua_pop(L, 1);
         lua_pushlstring(L, a, (size_t)(eq - a));
@@ -474,7 +446,7 @@ static int check_pairs(lua_State *L, const cli *c, const char *const keys[], con
         int known = 0;
         for (int i = 0; keys[i]; i++) known |= strcmp(keys[i], k) == 0;
         lua_pop(L, 1);
-        if (!known) return usage_error("unknown parameter '%s' (valid: %s)", k, list);
+        if (!known) return fl_cli_usage_error("unknown parameter '%s' (valid: %s)", k, list);
     }
     return -1;
 }
@@ -500,7 +472,7 @@ static int check_format(const char *key, const char *name) {
         size_t n = 0;
         for (const char *const *f = femlod_format_names(); *f && n + 16 < sizeof valid; f++)
             n += (size_t)snprintf(valid + n, sizeof valid - n, "%s%s", n ? ", " : "", *f);
-        return usage_error("%s: unknown format '%s' (valid: %s)", key, name, valid);
+        return fl_cli_usage_error("%s: unknown format '%s' (valid: %s)", key, name, valid);
     }
     return -1;
 }
@@ -512,19 +484,6 @@ static int io_formats(lua_State *L, int pairs, const char **format, const char *
     *input_format = pair_string(L, pairs, "input_format");
     int st = check_format("format", *format);
     return st >= 0 ? st : check_format("input_format", *input_format);
-}
-
-/* femlod.load(path, {format = format}); leaves the mesh on the stack (also
- * report.c's, through sweep.h). */
-void fl_cli_load_mesh(lua_State *L, int module, const char *path, const char *format) {
-    lua_getfield(L, module, "load");
-    lua_pushstring(L, path);
-    lua_createtable(L, 0, 1);
-    if (format) {
-        lua_pushstring(L, format);
-        lua_setfield(L, -2, "format");
-    }
-    lua_call(L, 2, 1);
 }
 
 /* Pushes a femlod.progress bar labelled label (drawn only when stderr is a
@@ -575,7 +534,7 @@ static int cmd_info(lua_State *L, const cli *c) {
     const char *mode = pair_string(L, pairs, "report");
     if (!mode) mode = "text";
     if (strcmp(mode, "text") != 0 && strcmp(mode, "row") != 0 && strcmp(mode, "fields") != 0)
-        return usage_error("report: unknown report '%s' (valid: text, row, fields)", mode);
+        return fl_cli_usage_error("report: unknown report '%s' (valid: text, row, fields)", mode);
     if ((st = check_format("format", format)) >= 0) return st;
 
     const char *path = c->argv[c->operand];
@@ -683,12 +642,12 @@ static int cmd_repair(lua_State *L, const cli *c) {
         if (k == 0 && t == LUA_TNUMBER) {
             double w = (double)lua_tonumber(L, -1);
             if (!(w >= 0.0) || !(w < HUGE_VAL))
-                return usage_error("weld: a finite length >= 0 or false expected, got %s",
-                                   lua_tostring(L, -1));
+                return fl_cli_usage_error("weld: a finite length >= 0 or false expected, got %s",
+                                          lua_tostring(L, -1));
         } else if (t != LUA_TNIL && t != LUA_TBOOLEAN) {
-            return usage_error("%s: %s expected, got '%s'", keys[k],
-                               k == 0 ? "a length or false" : "true or false",
-                               luaL_tolstring(L, -1, NULL));
+            return fl_cli_usage_error("%s: %s expected, got '%s'", keys[k],
+                                      k == 0 ? "a length or false" : "true or false",
+                                      luaL_tolstring(L, -1, NULL));
         }
         lua_setfield(L, opts, keys[k]);
     }
@@ -793,7 +752,8 @@ static int push_lock_list(lua_State *L, const char *name, const char *s) {
             }
         }
         if (!isint || v < 1)
-            return usage_error("%s: list of vertex indices (1, 2, ...) expected, got '%s'", name, s);
+            return fl_cli_usage_error("%s: list of vertex indices (1, 2, ...) expected, got '%s'",
+                                      name, s);
         lua_pushinteger(L, v);
         lua_rawseti(L, -2, ++n);
         if (!comma) break;
@@ -809,7 +769,7 @@ static int set_simplify_opt(lua_State *L, int opts, int spell, const simplify_op
                             const char *name, const char *value) {
     if (lua_getfield(L, opts, o->key) != LUA_TNIL) {
         lua_pop(L, 1);
-        return usage_error("option given twice: '%s'", name);
+        return fl_cli_usage_error("option given twice: '%s'", name);
     }
     lua_pop(L, 1);
     lua_pushstring(L, name);
@@ -821,7 +781,7 @@ static int set_simplify_opt(lua_State *L, int opts, int spell, const simplify_op
         else if (strcmp(value, "false") == 0)
             lua_pushboolean(L, 0);
         else
-            return usage_error("%s: true or false expected, got '%s'", name, value);
+            return fl_cli_usage_error("%s: true or false expected, got '%s'", name, value);
         break;
     case OPT_LOCK: {
         int st = push_lock_list(L, name, value);
@@ -829,15 +789,15 @@ static int set_simplify_opt(lua_State *L, int opts, int spell, const simplify_op
         break;
     }
     case OPT_PATH:
-        if (value[0] == '\0') return usage_error("%s: file name expected, got ''", name);
+        if (value[0] == '\0') return fl_cli_usage_error("%s: file name expected, got ''", name);
         lua_pushstring(L, value);
         break;
     default:
         if (o->kind == OPT_THRESHOLD && (strcmp(value, "off") == 0 || strcmp(value, "false") == 0))
             lua_pushboolean(L, 0);
         else if (lua_stringtonumber(L, value) == 0)
-            return usage_error("%s: number%s expected, got '%s'", name,
-                               o->kind == OPT_THRESHOLD ? " or off" : "", value);
+            return fl_cli_usage_error("%s: number%s expected, got '%s'", name,
+                                      o->kind == OPT_THRESHOLD ? " or off" : "", value);
         break;
     }
     lua_setfield(L, opts, o->key);
@@ -861,25 +821,25 @@ static int simplify_options(lua_State *L, const cli *c) {
             for (size_t k = 0; k < N_SIMPLIFY_OPTS && !o; k++)
                 if (strlen(simplify_opts[k].flag) == len && strncmp(simplify_opts[k].flag, a, len) == 0)
                     o = &simplify_opts[k];
-            if (!o) return usage_error("unknown option '%.*s'", (int)len, a);
+            if (!o) return fl_cli_usage_error("unknown option '%.*s'", (int)len, a);
             name = lua_pushlstring(L, a, len); /* popped at the end of the iteration */
             if (eq) {
                 value = eq + 1;
-                if (o->kind == OPT_SWITCH)
-                    return usage_error("%s takes no value", name);
+                if (o->kind == OPT_SWITCH) return fl_cli_usage_error("%s takes no value", name);
             } else if (o->kind != OPT_SWITCH) {
-                if (i + 1 >= c->argc) return usage_error("%s needs a value", name);
+                if (i + 1 >= c->argc) return fl_cli_usage_error("%s needs a value", name);
                 value = c->argv[++i];
             }
         } else {
             const char *eq = strchr(a, '=');
-            if (!eq || eq == a) return usage_error("expected name=value, got '%s'", a);
+            if (!eq || eq == a) return fl_cli_usage_error("expected name=value, got '%s'", a);
             size_t len = (size_t)(eq - a);
             for (size_t k = 0; k < N_SIMPLIFY_OPTS && !o; k++)
                 if (strlen(simplify_opts[k].key) == len && strncmp(simplify_opts[k].key, a, len) == 0)
                     o = &simplify_opts[k];
             if (!o)
-                return usage_error("unknown parameter '%.*s' (valid: %s)", (int)len, a, SIMPLIFY_KEYS);
+                return fl_cli_usage_error("unknown parameter '%.*s' (valid: %s)", (int)len, a,
+                                          SIMPLIFY_KEYS);
             name = lua_pushlstring(L, a, len);
             value = eq + 1;
         }
@@ -894,10 +854,11 @@ static int simplify_options(lua_State *L, const cli *c) {
         if (!key) { /* the one message about two keys */
             lua_getfield(L, spell, "target");
             lua_getfield(L, spell, "ratio");
-            return usage_error("give %s or %s, not both", lua_tostring(L, -2), lua_tostring(L, -1));
+            return fl_cli_usage_error("give %s or %s, not both", lua_tostring(L, -2),
+                                      lua_tostring(L, -1));
         }
         lua_getfield(L, spell, key);
-        return usage_error("%s: %s", lua_tostring(L, -1), msg);
+        return fl_cli_usage_error("%s: %s", lua_tostring(L, -1), msg);
     }
     lua_settop(L, spell);
     return -1;
@@ -906,7 +867,7 @@ static int simplify_options(lua_State *L, const cli *c) {
 static int cmd_simplify(lua_State *L, const cli *c) {
     const char *in = c->argv[c->operand], *out = c->argv[c->operand + 1];
     if (strncmp(in, "--", 2) == 0 || strncmp(out, "--", 2) == 0)
-        return usage_error("simplify: IN and OUT come first, then the options");
+        return fl_cli_usage_error("simplify: IN and OUT come first, then the options");
     int st = simplify_options(L, c);
     if (st >= 0) return st;
     int spell = lua_gettop(L), opts = spell - 1;
@@ -931,8 +892,8 @@ static int cmd_simplify(lua_State *L, const cli *c) {
             lua_pop(L, 1);
             if (v > nv) {
                 lua_getfield(L, spell, "lock");
-                return usage_error("%s: vertex %lld out of range (1..%lld)", lua_tostring(L, -1),
-                                   (long long)v, (long long)nv);
+                return fl_cli_usage_error("%s: vertex %lld out of range (1..%lld)",
+                                          lua_tostring(L, -1), (long long)v, (long long)nv);
             }
         }
         lua_pop(L, 1);
@@ -1019,23 +980,24 @@ static int lod_options(lua_State *L, const cli *c, double *size, const char **sp
             const char *eq = strchr(a, '=');
             size_t len = eq ? (size_t)(eq - a) : strlen(a);
             if (len != 6 || strncmp(a, "--size", 6) != 0)
-                return usage_error("unknown option '%.*s'", (int)len, a);
+                return fl_cli_usage_error("unknown option '%.*s'", (int)len, a);
             name = "--size";
             if (eq) {
                 value = eq + 1;
             } else {
-                if (i + 1 >= c->argc) return usage_error("--size needs a value");
+                if (i + 1 >= c->argc) return fl_cli_usage_error("--size needs a value");
                 value = c->argv[++i];
             }
         } else {
             const char *eq = strchr(a, '=');
-            if (!eq || eq == a) return usage_error("expected name=value, got '%s'", a);
+            if (!eq || eq == a) return fl_cli_usage_error("expected name=value, got '%s'", a);
             if ((size_t)(eq - a) != 4 || strncmp(a, "size", 4) != 0)
-                return usage_error("unknown parameter '%.*s' (valid: size)", (int)(eq - a), a);
+                return fl_cli_usage_error("unknown parameter '%.*s' (valid: size)", (int)(eq - a),
+                                          a);
             name = "size";
             value = eq + 1;
         }
-        if (*spelled) return usage_error("option given twice: '%s'", name);
+        if (*spelled) return fl_cli_usage_error("option given twice: '%s'", name);
         *spelled = name;
         if (strcmp(value, "inf") == 0) {
             *size = HUGE_VAL;
@@ -1046,17 +1008,17 @@ static int lod_options(lua_State *L, const cli *c, double *size, const char **sp
                 lua_pop(L, 1);
             }
             if (!ok || !(*size >= 0.0))
-                return usage_error("%s: number >= 0 or inf expected, got '%s'", name, value);
+                return fl_cli_usage_error("%s: number >= 0 or inf expected, got '%s'", name, value);
         }
     }
-    if (!*spelled) return usage_error("lod: --size T is required");
+    if (!*spelled) return fl_cli_usage_error("lod: --size T is required");
     return -1;
 }
 
 static int cmd_lod(lua_State *L, const cli *c) {
     const char *in = c->argv[c->operand], *out = c->argv[c->operand + 1];
     if (strncmp(in, "--", 2) == 0 || strncmp(out, "--", 2) == 0)
-        return usage_error("lod: PART.flh and OUT come first, then --size T");
+        return fl_cli_usage_error("lod: PART.flh and OUT come first, then --size T");
     double size = 0.0;
     const char *spelled;
     int st = lod_options(L, c, &size, &spelled);

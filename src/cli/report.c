@@ -6,6 +6,8 @@
  */
 #include "sweep.h"
 
+#include "cliutil.h"
+
 #include "lua/lfemlod.h"
 
 #include <stdio.h>

@@ -17,6 +17,8 @@
  */
 #include "sweep.h"
 
+#include "cliutil.h"
+
 #include "core.h" /* fl_out, fl_format_double */
 #include "femlod.h"
 #include "lua/lfemlod.h"

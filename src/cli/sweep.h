@@ -1,6 +1,6 @@
 /*
  * sweep.h - `femlod sweep`, `femlod run --record` (sweep.c) and `femlod report`
- * (report.c), called by main.c.
+ * (report.c), called by main.c; what they share with it is in cliutil.h.
  */
 #ifndef FEMLOD_CLI_SWEEP_H
 #define FEMLOD_CLI_SWEEP_H
@@ -15,16 +15,6 @@ typedef struct fl_sweep_cli {
     lua_Integer seed;
     int quiet, verbose, traceback;
 } fl_sweep_cli;
-
-/* Prints "femlod: MESSAGE" and the usage hint on stderr; returns 2 (main.c). */
-#if defined(__GNUC__)
-__attribute__((format(printf, 1, 2)))
-#endif
-int fl_cli_usage_error(const char *fmt, ...);
-
-/* femlod.load(path, {format = format}) with the module table at index
- * module; leaves the mesh on the stack (main.c). */
-void fl_cli_load_mesh(lua_State *L, int module, const char *path, const char *format);
 
 /* `femlod sweep RECIPE.lua ...`: returns the exit status (0 every point ran
  * and succeeded, 1 some point failed or crashed, 2 usage error). Runs in the

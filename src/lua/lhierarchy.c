@@ -669,7 +669,7 @@ static int hierarchy_collapse(lua_State *L) { return split_or_collapse(L, 0); }
 /* {====== refine and coarsen with a size function
  *
  * The function runs under lua_pcall from inside the core's operation: a
- * trampoline (size_call_lua) builds the node table and calls it, so that
+ * trampoline (number_call_lua) builds the node table and calls it, so that
  * nothing, not even a memory error in making the table, can raise through
  * the core. A failure makes call_size return NaN, which stops the operation
  * with FEMLOD_ECANCELLED and a valid front; the failure is raised once the
@@ -678,54 +678,74 @@ static int hierarchy_collapse(lua_State *L) { return split_or_collapse(L, 0); }
 
 enum { SIZE_OK, SIZE_ERROR, SIZE_BAD_RESULT };
 
-typedef struct size_call {
+/* A Lua function that the core calls for a number: refine's size function,
+ * refine_curvature's map. push_args pushes the arguments of the current
+ * call and returns their count. */
+typedef struct number_call number_call;
+struct number_call {
     lua_State *L;
-    int fn;                /* stack index of the function */
-    int failed;            /* SIZE_*; on SIZE_ERROR the error value is on the top */
-    const char *got;       /* SIZE_BAD_RESULT: what came back (static string) */
-    femlod_node_info info; /* the node of the current call */
-    double value;          /* its result */
-} size_call;
+    int fn;          /* stack index of the function */
+    int failed;      /* SIZE_*; on SIZE_ERROR the error value is on the top */
+    const char *got; /* SIZE_BAD_RESULT: what came back (static string) */
+    double value;    /* the result of the current call */
+    int (*push_args)(lua_State *L, const number_call *c);
+};
 
-/* Arguments: the function, the size_call. Raises freely: it runs under pcall. */
-static int size_call_lua(lua_State *L) {
-    size_call *sc = (size_call *)lua_touserdata(L, 2);
-    const femlod_node_info *n = &sc->info;
+/* Arguments: the function, the number_call. Raises freely: it runs under pcall. */
+static int number_call_lua(lua_State *L) {
+    number_call *c = (number_call *)lua_touserdata(L, 2);
     lua_pushvalue(L, 1);
-    lua_pushnumber(L, n->position[0]);
-    lua_pushnumber(L, n->position[1]);
-    lua_pushnumber(L, n->position[2]);
-    push_node(L, n, 0);
-    lua_call(L, 4, 1);
+    lua_call(L, c->push_args(L, c), 1);
     if (lua_type(L, -1) != LUA_TNUMBER) {
-        sc->failed = SIZE_BAD_RESULT;
-        sc->got = lua_typename(L, lua_type(L, -1));
+        c->failed = SIZE_BAD_RESULT;
+        c->got = lua_typename(L, lua_type(L, -1));
     } else {
-        sc->value = (double)lua_tonumber(L, -1);
-        if (isnan(sc->value)) {
-            sc->failed = SIZE_BAD_RESULT;
-            sc->got = "nan";
+        c->value = (double)lua_tonumber(L, -1);
+        if (isnan(c->value)) {
+            c->failed = SIZE_BAD_RESULT;
+            c->got = "nan";
         }
     }
     return 0;
 }
 
-/* femlod_size_fn: nothing here may raise. The stack space was reserved
- * before the core ran; every call leaves the stack as it found it, but the
- * failing one, which may leave the error value. */
-static double call_size(void *payload, const femlod_node_info *node) {
-    size_call *sc = (size_call *)payload;
-    lua_State *L = sc->L;
-    if (sc->failed != SIZE_OK) return NAN;
-    sc->info = *node;
-    lua_pushcfunction(L, size_call_lua); /* a light C function: allocates nothing */
-    lua_pushvalue(L, sc->fn);
-    lua_pushlightuserdata(L, sc);
+/* The function's result for the current call, NaN once a call failed.
+ * Nothing here may raise: the stack space was reserved before the core
+ * ran; every call leaves the stack as it found it, but the failing one,
+ * which may leave the error value. */
+static double number_call_run(number_call *c) {
+    lua_State *L = c->L;
+    lua_pushcfunction(L, number_call_lua); /* a light C function: allocates nothing */
+    lua_pushvalue(L, c->fn);
+    lua_pushlightuserdata(L, c);
     if (lua_pcall(L, 2, 0, 0) != LUA_OK) {
-        sc->failed = SIZE_ERROR;
+        c->failed = SIZE_ERROR;
         return NAN;
     }
-    return sc->failed == SIZE_OK ? sc->value : NAN;
+    return c->failed == SIZE_OK ? c->value : NAN;
+}
+
+typedef struct size_call {
+    number_call c;         /* first: the number_call is the size_call */
+    femlod_node_info info; /* the node of the current call */
+} size_call;
+
+/* x, y, z and the node table. */
+static int push_size_args(lua_State *L, const number_call *c) {
+    const femlod_node_info *n = &((const size_call *)c)->info;
+    lua_pushnumber(L, n->position[0]);
+    lua_pushnumber(L, n->position[1]);
+    lua_pushnumber(L, n->position[2]);
+    push_node(L, n, 0);
+    return 4;
+}
+
+/* femlod_size_fn: nothing here may raise (number_call_run). */
+static double call_size(void *payload, const femlod_node_info *node) {
+    size_call *sc = (size_call *)payload;
+    if (sc->c.failed != SIZE_OK) return NAN;
+    sc->info = *node;
+    return number_call_run(&sc->c);
 }
 
 typedef femlod_status (*lod_op)(femlod_hierarchy *, double, femlod_size_fn, void *, size_t *,
@@ -736,12 +756,12 @@ static int refine_or_coarsen(lua_State *L, lod_op op, const char *name) {
     fl_hierarchy *h = fl_lhierarchy_check(L, 1);
     int t = lua_type(L, 2);
     double size = 0.0;
-    size_call sc = {L, 0, SIZE_OK, NULL, {0}, 0.0};
+    size_call sc = {{L, 0, SIZE_OK, NULL, 0.0, push_size_args}, {0}};
     if (t == LUA_TNUMBER) {
         size = (double)lua_tonumber(L, 2);
         luaL_argcheck(L, !isnan(size), 2, "size is NaN");
     } else if (t == LUA_TFUNCTION) {
-        sc.fn = 2;
+        sc.c.fn = 2;
     } else {
         return luaL_typeerror(L, 2, "number or function");
     }
@@ -751,13 +771,13 @@ static int refine_or_coarsen(lua_State *L, lod_op op, const char *name) {
     femlod_error err;
     double t0 = fl_lua_clock();
     h->busy = 1;
-    femlod_status st = op(h->hier, size, sc.fn ? call_size : NULL, &sc, &ops, &err);
+    femlod_status st = op(h->hier, size, sc.c.fn ? call_size : NULL, &sc, &ops, &err);
     h->busy = 0;
-    if (sc.failed == SIZE_ERROR) return lua_error(L);
-    if (sc.failed == SIZE_BAD_RESULT)
+    if (sc.c.failed == SIZE_ERROR) return lua_error(L);
+    if (sc.c.failed == SIZE_BAD_RESULT)
         return luaL_argerror(L, 2, lua_pushfstring(L, "size function returned %s for node %I "
                                                       "(number expected)",
-                                                   sc.got, lid(sc.info.id)));
+                                                   sc.c.got, lid(sc.info.id)));
     if (st != FEMLOD_OK) return fl_lua_raise(L, &err);
     if (fl_lua_verbose(L))
         fl_lua_log(L, "%s: %zu %s, front %zu triangles (%.3f s)", name, ops,
@@ -833,47 +853,21 @@ static int hierarchy_rescale(lua_State *L) {
  * Returns the splits done. */
 
 typedef struct kappa_call {
-    lua_State *L;
-    int fn;          /* stack index of the function */
-    int failed;      /* SIZE_*; on SIZE_ERROR the error value is on the top */
-    const char *got; /* SIZE_BAD_RESULT: what came back (static string) */
-    double kappa;    /* the argument of the current call */
-    double value;    /* its result */
+    number_call c; /* first: the number_call is the kappa_call */
+    double kappa;  /* the argument of the current call */
 } kappa_call;
 
-/* Arguments: the function, the kappa_call. Raises freely: it runs under pcall. */
-static int kappa_call_lua(lua_State *L) {
-    kappa_call *kc = (kappa_call *)lua_touserdata(L, 2);
-    lua_pushvalue(L, 1);
-    lua_pushnumber(L, kc->kappa);
-    lua_call(L, 1, 1);
-    if (lua_type(L, -1) != LUA_TNUMBER) {
-        kc->failed = SIZE_BAD_RESULT;
-        kc->got = lua_typename(L, lua_type(L, -1));
-    } else {
-        kc->value = (double)lua_tonumber(L, -1);
-        if (isnan(kc->value)) {
-            kc->failed = SIZE_BAD_RESULT;
-            kc->got = "nan";
-        }
-    }
-    return 0;
+static int push_kappa_args(lua_State *L, const number_call *c) {
+    lua_pushnumber(L, ((const kappa_call *)c)->kappa);
+    return 1;
 }
 
 /* femlod_kappa_map_fn: nothing here may raise (as call_size). */
 static double call_kappa_map(void *payload, double kappa) {
     kappa_call *kc = (kappa_call *)payload;
-    lua_State *L = kc->L;
-    if (kc->failed != SIZE_OK) return NAN;
+    if (kc->c.failed != SIZE_OK) return NAN;
     kc->kappa = kappa;
-    lua_pushcfunction(L, kappa_call_lua);
-    lua_pushvalue(L, kc->fn);
-    lua_pushlightuserdata(L, kc);
-    if (lua_pcall(L, 2, 0, 0) != LUA_OK) {
-        kc->failed = SIZE_ERROR;
-        return NAN;
-    }
-    return kc->failed == SIZE_OK ? kc->value : NAN;
+    return number_call_run(&kc->c);
 }
 
 /* Computes the input mesh's kappa (in a Lua-owned buffer, so that a raise
@@ -910,11 +904,11 @@ static int hierarchy_refine_curvature(lua_State *L) {
     fl_opts o;
     fl_opts_open(&o, L, 2, keys);
     no_more_arguments(L, 3);
-    kappa_call kc = {L, 0, SIZE_OK, NULL, 0.0, 0.0};
+    kappa_call kc = {{L, 0, SIZE_OK, NULL, 0.0, push_kappa_args}, 0.0};
     femlod_curvature_lod_options co = FEMLOD_CURVATURE_LOD_OPTIONS_INIT;
     int mt = fl_opts_push(&o, "map");
     if (mt == LUA_TFUNCTION) {
-        kc.fn = lua_gettop(L); /* stays on the stack for the calls */
+        kc.c.fn = lua_gettop(L); /* stays on the stack for the calls */
     } else if (mt != LUA_TNIL) {
         if (mt != LUA_TSTRING)
             return fl_opts_error(&o, "map", lua_pushfstring(L, "'linear', 'log' or function "
@@ -948,7 +942,7 @@ static int hierarchy_refine_curvature(lua_State *L) {
         if (!(percentile > 0.0 && percentile <= 1.0))
             return fl_opts_error(&o, "percentile", "must be in (0, 1]");
     }
-    if (kc.fn && !(isnan(fine) && isnan(coarse) && isnan(percentile)))
+    if (kc.c.fn && !(isnan(fine) && isnan(coarse) && isnan(percentile)))
         return luaL_argerror(L, 2, "a map function replaces fine, coarse and percentile: "
                                    "give one or the other");
     fl_progress_call pc;
@@ -980,15 +974,15 @@ static int hierarchy_refine_curvature(lua_State *L) {
     co.fine = fine;
     co.coarse = coarse;
     co.percentile = percentile;
-    co.fn = kc.fn ? call_kappa_map : NULL;
+    co.fn = kc.c.fn ? call_kappa_map : NULL;
     co.payload = &kc;
     femlod_status st = femlod_hierarchy_refine_curvature(h->hier, &co, &ops, &err);
     h->busy = 0;
-    if (kc.failed == SIZE_ERROR) return lua_error(L);
-    if (kc.failed == SIZE_BAD_RESULT)
+    if (kc.c.failed == SIZE_ERROR) return lua_error(L);
+    if (kc.c.failed == SIZE_BAD_RESULT)
         return fl_opts_error(&o, "map", lua_pushfstring(L, "function returned %s for kappa %f "
                                                            "(number expected)",
-                                                        kc.got, (lua_Number)kc.kappa));
+                                                        kc.c.got, (lua_Number)kc.kappa));
     fl_opts_progress_check(&o, &pc, st);
     if (st != FEMLOD_OK) return fl_lua_raise(L, &err);
     if (fl_lua_verbose(L))

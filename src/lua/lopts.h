@@ -15,7 +15,7 @@
 #ifndef FEMLOD_LOPTS_H
 #define FEMLOD_LOPTS_H
 
-#include "lfemlod.h"
+#include "lutil.h"
 
 typedef struct fl_opts {
     lua_State *L;

@@ -24,10 +24,10 @@
  * memory" (meshopt_setAllocator: a bump arena whose pages an untimed
  * first call has already touched). On the VMs here a first-touch page
  * fault costs 10-28 microseconds and more when the host is busy, which
- * was 11-20% of meshoptimizer's time in session 17's runs and most of
- * its run-to-run spread; the warm figure is its time without them, the steadier
- * comparison and the harder one for femlod (which maps its own blocks
- * at once but still pays for them).
+ * was 11-20% of meshoptimizer's time in the runs measured and most of
+ * its run-to-run spread (docs/performance.md); the warm figure is its
+ * time without them, the steadier comparison and the harder one for
+ * femlod (which maps its own blocks at once but still pays for them).
  *
  * Each femlod run is also paired with a meshoptimizer run (as programs
  * call it) made just before it: femlod's exact mode runs for about 25 s,

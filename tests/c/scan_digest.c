@@ -4,8 +4,8 @@
  * the marked scan everywhere, not one side per face at interior vertices of
  * an oriented mesh). The test scan_equivalence (tests/scan_compare.cmake)
  * runs both and requires identical lines: the one-side scan must find the
- * same edges, so the passes make the same choices (docs/simplify.md,
- * "Session 10").
+ * same edges, so the passes make the same choices (docs/simplify.md
+ * "Fast passes").
  *
  * Usage: scan_digest DATA-FOLDER. Each line: case, output triangles,
  * collapses, fast collapses, FNV-1a hashes of the output mesh and of the

@@ -6,6 +6,7 @@
  * format, locale independence, atomic writes that leave nothing behind, and
  * that no truncation or byte flip of a valid file breaks the readers. */
 #include "core.h"
+#include "io_util.h"
 
 #include "check.h"
 #include "shapes.h"
