@@ -71,13 +71,16 @@ static void usage_text(FILE *f) {
           "                   --fast-above F  (fast passes down to F x target)\n"
           "                   --threads N  (0: all processors; the output does not\n"
           "                   depend on it)\n"
-          "                   --hierarchy PART.flh  (also write the vertex hierarchy)\n"
+          "                   --hierarchy PART.flh  (also write the vertex hierarchy,\n"
+          "                   down to the coarsest mesh the thresholds allow)\n"
+          "                   --hierarchy-floor N|off  (stop the hierarchy at N)\n"
           "                   or as pairs: target=3000 min_stretch=0.3 lock=4,9\n"
-          "  lod PART.flh OUT --size T\n"
-          "                   write a mesh from a saved hierarchy: the simplification\n"
-          "                   result, refined where a vertex's e_size (mean edge\n"
-          "                   length) exceeds T; 0 gives the input, inf the\n"
-          "                   simplification result; also size=T\n"
+          "  lod PART.flh OUT --size T | --target N\n"
+          "                   write a mesh from a saved hierarchy: --size: the\n"
+          "                   coarsest front refined where a vertex's e_size (mean\n"
+          "                   edge length) exceeds T (0 gives the input, inf the\n"
+          "                   coarsest mesh); --target: N triangles from the saved\n"
+          "                   front, its density kept; also size=T, target=N\n"
           "  sweep RECIPE.lua [name=value ...] --grid NAME=V1,V2,... [--grid ...]\n"
           "                   run the recipe once per grid point (the last --grid\n"
           "                   varies fastest), each in its own process; writes\n"
@@ -723,13 +726,14 @@ static const simplify_opt simplify_opts[] = {
     {"--threads", "threads", OPT_NUMBER},
     {"--lock", "lock", OPT_LOCK},
     {"--hierarchy", "hierarchy", OPT_PATH}, /* not a simplify option: the .flh to write */
+    {"--hierarchy-floor", "hierarchy_floor", OPT_THRESHOLD},
 };
 #define N_SIMPLIFY_OPTS (sizeof simplify_opts / sizeof simplify_opts[0])
 
 static const char SIMPLIFY_KEYS[] = "target, ratio, tolerance, max_deviation, min_stretch, "
                                     "max_size, max_valence, feature_angle, feature_weight, "
                                     "max_normal_change, keep_boundary, area_weighted, fast_above, threads, lock, "
-                                    "hierarchy";
+                                    "hierarchy, hierarchy_floor";
 
 /* Pushes the list "I,J,K" as a table of integers (range checked later,
  * against the mesh). */
@@ -876,6 +880,13 @@ static int cmd_simplify(lua_State *L, const cli *c) {
     int flh = lua_gettop(L);
     lua_pushnil(L);
     lua_setfield(L, opts, "hierarchy");
+    /* Without a hierarchy to write, the collapses past the target would be
+     * wasted: stop at the target unless --hierarchy-floor says otherwise. */
+    if (lua_isnil(L, flh) && lua_getfield(L, opts, "hierarchy_floor") == LUA_TNIL) {
+        lua_pushboolean(L, 0);
+        lua_setfield(L, opts, "hierarchy_floor");
+    }
+    lua_settop(L, flh);
 
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);
@@ -972,34 +983,57 @@ static int cmd_simplify(lua_State *L, const cli *c) {
  * ===================================================================== */
 
 /* Reads --size T, --size=T or size=T after PART.flh OUT into *size. */
-static int lod_options(lua_State *L, const cli *c, double *size, const char **spelled) {
+/* lod's options: --size T (or size=T) or --target N (or target=N), one of
+ * them; *target is 0 for --size. */
+static int lod_options(lua_State *L, const cli *c, double *size, lua_Integer *target,
+                       const char **spelled) {
     *spelled = NULL;
+    *target = 0;
     for (int i = c->pairs; i < c->argc; i++) {
         const char *a = c->argv[i], *value = NULL, *name = a;
+        int is_target;
         if (strncmp(a, "--", 2) == 0) {
             const char *eq = strchr(a, '=');
             size_t len = eq ? (size_t)(eq - a) : strlen(a);
-            if (len != 6 || strncmp(a, "--size", 6) != 0)
-                return fl_cli_usage_error("unknown option '%.*s'", (int)len, a);
-            name = "--size";
+            if (len == 6 && strncmp(a, "--size", 6) == 0)
+                name = "--size";
+            else if (len == 8 && strncmp(a, "--target", 8) == 0)
+                name = "--target";
+            else
+                return fl_cli_usage_error("unknown option '%.*s' (valid: --size, --target)", (int)len, a);
             if (eq) {
                 value = eq + 1;
             } else {
-                if (i + 1 >= c->argc) return fl_cli_usage_error("--size needs a value");
+                if (i + 1 >= c->argc) return fl_cli_usage_error("%s needs a value", name);
                 value = c->argv[++i];
             }
         } else {
             const char *eq = strchr(a, '=');
             if (!eq || eq == a) return fl_cli_usage_error("expected name=value, got '%s'", a);
-            if ((size_t)(eq - a) != 4 || strncmp(a, "size", 4) != 0)
-                return fl_cli_usage_error("unknown parameter '%.*s' (valid: size)", (int)(eq - a),
-                                          a);
-            name = "size";
+            size_t len = (size_t)(eq - a);
+            if (len == 4 && strncmp(a, "size", 4) == 0)
+                name = "size";
+            else if (len == 6 && strncmp(a, "target", 6) == 0)
+                name = "target";
+            else
+                return fl_cli_usage_error("unknown parameter '%.*s' (valid: size, target)", (int)len, a);
             value = eq + 1;
         }
-        if (*spelled) return fl_cli_usage_error("option given twice: '%s'", name);
+        is_target = strstr(name, "target") != NULL;
+        if (*spelled)
+            return fl_cli_usage_error((strstr(*spelled, "target") != NULL) == is_target
+                                          ? "option given twice: '%s'"
+                                          : "give one of --size and --target, not both ('%s')",
+                                      name + (name[0] == '-' ? 2 : 0));
         *spelled = name;
-        if (strcmp(value, "inf") == 0) {
+        if (is_target) {
+            int ok = lua_stringtonumber(L, value) != 0 && lua_isinteger(L, -1);
+            lua_Integer n = ok ? lua_tointeger(L, -1) : 0;
+            if (lua_gettop(L) && ok) lua_pop(L, 1);
+            if (!ok || n < 1 || n > 4294967295LL)
+                return fl_cli_usage_error("%s: a triangle count >= 1 expected, got '%s'", name, value);
+            *target = n;
+        } else if (strcmp(value, "inf") == 0) {
             *size = HUGE_VAL;
         } else {
             int ok = lua_stringtonumber(L, value) != 0;
@@ -1011,7 +1045,7 @@ static int lod_options(lua_State *L, const cli *c, double *size, const char **sp
                 return fl_cli_usage_error("%s: number >= 0 or inf expected, got '%s'", name, value);
         }
     }
-    if (!*spelled) return fl_cli_usage_error("lod: --size T is required");
+    if (!*spelled) return fl_cli_usage_error("lod: --size T or --target N is required");
     return -1;
 }
 
@@ -1020,8 +1054,9 @@ static int cmd_lod(lua_State *L, const cli *c) {
     if (strncmp(in, "--", 2) == 0 || strncmp(out, "--", 2) == 0)
         return fl_cli_usage_error("lod: PART.flh and OUT come first, then --size T");
     double size = 0.0;
+    lua_Integer target = 0;
     const char *spelled;
-    int st = lod_options(L, c, &size, &spelled);
+    int st = lod_options(L, c, &size, &target, &spelled);
     if (st >= 0) return st;
 
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
@@ -1030,11 +1065,23 @@ static int cmd_lod(lua_State *L, const cli *c) {
     lua_pushstring(L, in);
     lua_call(L, 1, 1);
     int h = lua_gettop(L);
-    lua_pushnumber(L, HUGE_VAL);
-    call_method(L, h, "coarsen", 1, 0);
-    lua_pushnumber(L, size);
-    call_method(L, h, "refine", 1, 1);
-    lua_Integer splits = lua_tointeger(L, -1);
+    lua_Integer splits = 0, ops = 0;
+    if (target > 0) {
+        /* from the saved front, keeping its density (a warning says why
+         * when the count cannot be met) */
+        lua_createtable(L, 0, 1);
+        lua_pushinteger(L, target);
+        lua_setfield(L, -2, "target");
+        call_method(L, h, "rescale", 1, 1);
+        ops = lua_tointeger(L, -1);
+    } else {
+        /* a uniform threshold: from the coarsest front, split while e_size > T */
+        lua_pushnumber(L, HUGE_VAL);
+        call_method(L, h, "coarsen", 1, 0);
+        lua_pushnumber(L, size);
+        call_method(L, h, "refine", 1, 1);
+        splits = lua_tointeger(L, -1);
+    }
     call_method(L, h, "mesh", 0, 1);
     int result = lua_gettop(L);
     lua_pushstring(L, out);
@@ -1042,7 +1089,10 @@ static int cmd_lod(lua_State *L, const cli *c) {
     if (c->quiet) return EXIT_OK;
 
     char state[48];
-    snprintf(state, sizeof state, "size %.6g", size);
+    if (target > 0)
+        snprintf(state, sizeof state, "target %lld", (long long)target);
+    else
+        snprintf(state, sizeof state, "size %.6g", size);
     lua_getglobal(L, "require");
     lua_pushliteral(L, "femlod.report");
     lua_call(L, 1, 1);
@@ -1056,7 +1106,10 @@ static int cmd_lod(lua_State *L, const cli *c) {
     lua_pushstring(L, state);
     lua_call(L, 3, 1);
     printf("%s\n", lua_tostring(L, -1));
-    printf("%lld splits from the simplification result\n", (long long)splits);
+    if (target > 0)
+        printf("%lld operations from the saved front\n", (long long)ops);
+    else
+        printf("%lld splits from the coarsest front\n", (long long)splits);
     call_method(L, result, "counts", 0, 1);
     lua_getfield(L, -1, "triangles");
     lua_getfield(L, -2, "vertices");

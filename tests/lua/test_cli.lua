@@ -36,7 +36,7 @@ do
   for _, want in ipairs { "^usage: femlod %[options%] COMMAND", "\n  run RECIPE%.lua ", "\n  info MESH ",
     "\n  convert IN OUT ", "\n  simplify IN OUT ", "%-%-target N | %-%-ratio R", "%-%-min%-stretch X",
     "%-%-max%-normal%-change DEG", "%-%-keep%-boundary", "%-%-lock I,J,K", "%-%-fast%-above F", "%-%-threads N", "%-%-hierarchy PART%.flh",
-    "\n  lod PART%.flh OUT %-%-size T\n", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-q, %-%-quiet ", "\n  %-v, %-%-verbose ", "\n  %-%-traceback ",
+    "\n  lod PART%.flh OUT %-%-size T | %-%-target N\n", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-q, %-%-quiet ", "\n  %-v, %-%-verbose ", "\n  %-%-traceback ",
     "Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded" } do
     T.check(out:find(want), "--help mentions " .. want)
   end
@@ -484,7 +484,7 @@ do
   simplify_usage("femlod: option given twice: 'target'", "--target", "100", "target=200")
   simplify_usage("femlod: unknown parameter 'targt' (valid: target, ratio, tolerance, max_deviation, min_stretch, "
     .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, fast_above, threads, lock, "
-    .. "hierarchy)",
+    .. "hierarchy, hierarchy_floor)",
     "targt=100")
   simplify_usage("femlod: expected name=value, got '3000'", "--keep-boundary", "3000")
   simplify_usage("femlod: --fast-above: number >= 1 or boolean expected, got 0.5", "--fast-above", "0.5")
@@ -559,7 +559,7 @@ do
     "model (H x W x D) | state | elements | stretch (avg, min) | size (max) | valence (max)",
     string.format("cli_hier.flh (0.9206 x 0.5111 x 1) | size 0.03 | %d | %.3f, %.3f | %.4g | %d", n3, q3.stretch_avg,
       q3.stretch_min, q3.size_max, q3.valence_max),
-    string.format("%d splits from the simplification result", (n3 - 2000) // 2),
+    string.format("%d splits from the coarsest front", (n3 - 2000) // 2),
     string.format("%s: %d triangles, %d vertices (obj)", lod3, n3, m3:counts().vertices), "" }, "\n"),
     "lod prints its Table 1 row, the splits and the summary")
   local g = femlod.load_hierarchy(flh)
@@ -580,6 +580,19 @@ do
   code, text = run("lod", flh, glb, "--size", "0.03")
   T.check(text:find(glb:gsub("%p", "%%%0") .. ": %d+ triangles, %d+ vertices %(stl%)\n$"), "lod: the format from OUT")
 
+  -- lod --target: from the saved front, its density kept; a count the
+  -- hierarchy cannot reach is reached as near as it can, with a warning.
+  local lodt = path("lod_target.obj")
+  code, text, err = run("lod", flh, lodt, "--target", "3000")
+  T.eq(code, 0, "lod --target 3000: " .. err)
+  T.eq(femlod.load(lodt):counts().triangles, 3000, "lod --target 3000: the count")
+  T.check(text:find("| target 3000 | 3000 |", 1, true) ~= nil, "lod --target: the row says target: " .. text)
+  local coarse_n = femlod.load_hierarchy(flh):stats().hierarchy_triangles
+  code, text, err = run("lod", flh, lodt, "target=10")
+  T.eq(code, 0, "lod target=10: stops at the coarsest, exit 0")
+  T.eq(err, string.format("femlod: warning: rescale: asked 10, reached %d: %s\n", coarse_n,
+    femlod.load_hierarchy(flh):stats().hierarchy_binding), "lod: the warning says why")
+
   -- Usage errors: exit 2, nothing written.
   local never = path("never_lod.obj")
   os.remove(never)
@@ -587,13 +600,17 @@ do
     usage(first_line, "lod", flh, never, ...)
     T.check(not T.exists(never), "no output after: " .. table.concat({ ... }, " "))
   end
-  lod_usage("femlod: lod: --size T is required")
+  lod_usage("femlod: lod: --size T or --target N is required")
   lod_usage("femlod: --size needs a value", "--size")
   lod_usage("femlod: --size: number >= 0 or inf expected, got 'fine'", "--size", "fine")
   lod_usage("femlod: --size: number >= 0 or inf expected, got '-1'", "--size", "-1")
   lod_usage("femlod: size: number >= 0 or inf expected, got ''", "size=")
-  lod_usage("femlod: unknown option '--target'", "--target", "100")
-  lod_usage("femlod: unknown parameter 'target' (valid: size)", "target=100")
+  lod_usage("femlod: unknown option '--targt' (valid: --size, --target)", "--targt", "100")
+  lod_usage("femlod: unknown parameter 'targt' (valid: size, target)", "targt=100")
+  lod_usage("femlod: --target: a triangle count >= 1 expected, got '0'", "--target", "0")
+  lod_usage("femlod: target: a triangle count >= 1 expected, got '1.5'", "target=1.5")
+  lod_usage("femlod: give one of --size and --target, not both ('target')", "--size", "1", "--target", "100")
+  lod_usage("femlod: option given twice: 'target'", "--target", "100", "target=200")
   lod_usage("femlod: option given twice: 'size'", "--size", "1", "size=2")
   lod_usage("femlod: expected name=value, got '0.03'", "0.03")
   usage("femlod: missing a hierarchy file and an output file", "lod", flh)
@@ -648,9 +665,11 @@ do
   T.eq(rows[1] and rows[1][1], "original", "recipe_cae.lua: the original's row")
   T.eq(rows[2] and rows[2][2], 12000, "recipe_cae.lua: simplified to 12000")
   T.check(rows[3] and rows[3][1] == "curvature" and rows[3][2] > 12000, "recipe_cae.lua: curvature refines")
-  local want = rows[3] and math.floor(0.5 * rows[3][2] + 0.5) or 0
-  T.check(rows[4] and rows[4][1] == "global" and math.abs(rows[4][2] - want) <= 0.005 * want,
-    "recipe_cae.lua: rescaled by 0.5 within 0.5%: " .. tostring(rows[4] and rows[4][2]) .. " for " .. want)
+  T.check(rows[4] and rows[4][1] == "global" and math.abs(rows[4][2] - 12000) <= 0.005 * 12000,
+    "recipe_cae.lua: rescaled back to 12000 within 0.5%: " .. tostring(rows[4] and rows[4][2]))
+  -- not the plain simplification again: the hierarchy goes on past the target
+  local plain, recipe = text:match("| simplified | 12000 | ([^\n]*)"), text:match("| global | %d+ | ([^\n]*)")
+  T.check(plain and recipe and plain ~= recipe, "recipe_cae.lua: the global row differs from the simplified one")
 
   -- Region LOD around the spindle hole (docs/guide.md); the release pass only
   if T.heavy then
