@@ -71,7 +71,7 @@ typedef struct fl_grid {
     size_t mapped; /* blocks below this index are mapped (new_block) */
     uint32_t free_block;
     size_t nfree;  /* blocks on the free list */
-    int fixed;     /* 1: the free list only, never a new block (a worker's view, simplify.c) */
+    int fixed;     /* 1: the free list only, never a new block (a worker's view, simplify/fast.c) */
 } fl_grid;
 
 /* Grid over [lo, hi] with cells of about edge h, enlarged so that there are
@@ -92,7 +92,7 @@ FL_INTERNAL int fl_grid_move(fl_grid *g, uint32_t item, const double olo[3], con
                              const double nlo[3], const double nhi[3]);
 /* Puts n free blocks, from the free list, then new ones, at the head of
  * the chain *head (linked by next, UINT32_MAX-terminated): a fast-pass
- * worker's own pool (simplify.c). 0 on ENOMEM (the chain then holds what
+ * worker's own pool (simplify/fast.c). 0 on ENOMEM (the chain then holds what
  * could be taken). */
 FL_INTERNAL int fl_grid_take(fl_grid *g, size_t n, uint32_t *head);
 /* Cell index range [c0, c1] (inclusive) covering a box. */

@@ -33,7 +33,7 @@ FL_INTERNAL int fl_log_add(femlod_collapse_log *log, uint32_t i, uint32_t j, con
                            size_t nfaces);
 
 /* Appends every collapse of src to dst, node ids >= from raised by shift
- * (a fast-pass worker's provisional ids, simplify.c). 0 on ENOMEM. */
+ * (a fast-pass worker's provisional ids, simplify/fast.c). 0 on ENOMEM. */
 FL_INTERNAL int fl_log_merge(femlod_collapse_log *dst, const femlod_collapse_log *src, uint32_t from,
                              uint32_t shift);
 /* Empties a log, keeping its memory. */

@@ -385,18 +385,22 @@ local function write_atomic(path, text, level)
   if not ok then error(err, level) end
 end
 
+-- The whole file, or nil and why not (the system's message without the path).
 local function read_all(path)
-  if not io_open then return nil end
-  local ok, f = pcall(io_open, path, "rb")
-  if not ok then return nil end
-  if not f then return nil end
-  local data = f:read("a")
+  if not io_open then return nil, "no io library" end
+  local ok, f, err = pcall(io_open, path, "rb")
+  if not ok then return nil, tostring(f) end
+  if not f then return nil, (gsub(tostring(err), "^.*: ", "")) end
+  local data, rerr = f:read("a")
   f:close()
+  if not data then return nil, (gsub(tostring(rerr), "^.*: ", "")) end
   return data
 end
 
 -- Where model-viewer.min.js is: opts.viewer, $FEMLOD_MODEL_VIEWER, then the
--- places the build and the install put it (femlod._VIEWER_PATHS).
+-- places the build and the install put it (femlod._VIEWER_PATHS). A variable
+-- set to a file that cannot be read is an error, not a reason to take
+-- another copy: whoever set it meant that file.
 local function find_viewer(opt)
   if type(opt) == "string" then
     local js = read_all(opt)
@@ -405,17 +409,16 @@ local function find_viewer(opt)
   end
   local tried = {}
   local env = os_getenv and os_getenv("FEMLOD_MODEL_VIEWER")
-  local list = {}
-  if env and env ~= "" then list[1] = env end
+  if env and env ~= "" then
+    local js, why = read_all(env)
+    if js then return js, env end
+    error(format("FEMLOD_MODEL_VIEWER is '%s', which cannot be read (%s): set it to the path of "
+      .. "model-viewer.min.js, or unset it to use femlod's own copy", env, why), 3)
+  end
   local ok, femlod = false, nil
   if require then ok, femlod = pcall(require, "femlod") end
   if ok and type(femlod) == "table" and type(femlod._VIEWER_PATHS) == "table" then
     for _, p in ipairs(femlod._VIEWER_PATHS) do tried[#tried + 1] = p end
-  end
-  for _, p in ipairs(list) do
-    local js = read_all(p)
-    if js then return js, p end
-    tried[#tried + 1] = p
   end
   if ok and type(femlod) == "table" and femlod._viewer_js then
     local js, p = femlod._viewer_js()
@@ -512,11 +515,32 @@ local function check_opts(opts)
   end
   local ref = opts.reference
   local mt = type(ref) == "userdata" and getmetatable(ref)
-  if ref ~= nil and not (type(mt) == "table" and mt.__name == "femlod.Mesh") then
-    error(format("bad argument #2 to 'report' (reference: femlod.Mesh expected, got %s)",
+  if ref ~= nil and type(ref) ~= "string" and not (type(mt) == "table" and mt.__name == "femlod.Mesh") then
+    error(format("bad argument #2 to 'report' (reference: femlod.Mesh or path expected, got %s)",
       type(mt) == "table" and mt.__name or type(ref)), 3)
   end
   return opts
+end
+
+-- The femlod module (the binding), for the helpers that load or write files.
+local function binding()
+  local femlod = loaded["femlod"]
+  if not femlod and require then
+    local ok, m = pcall(require, "femlod")
+    femlod = ok and m or nil
+  end
+  return type(femlod) == "table" and femlod or nil
+end
+
+-- opts.reference given as a path: the mesh, loaded as femlod.load loads it
+-- (the sandbox's folders apply; a sweep's record lists the file as read).
+-- Its errors are femlod.load's, at the line of report()'s caller.
+local function load_reference(path)
+  local femlod = binding()
+  if not (femlod and femlod.load) then error("reference: loading a path needs the femlod module", 3) end
+  local ok, m = pcall(femlod.load, path)
+  if not ok then error(m, 3) end
+  return m
 end
 
 local function table1(rows)
@@ -534,8 +558,9 @@ local function table1(rows)
 end
 
 -- report(mesh [, opts]): the summary of a mesh, and its HTML page when
--- opts.html is given. opts: reference (a Mesh: deviation and its own row),
--- name, reference_name, title, html (path), viewer (path of
+-- opts.html is given. opts: reference (a Mesh, or the path of a mesh file as
+-- `femlod report --reference` takes it: deviation and its own row), name,
+-- reference_name (default the file's name for a path), title, html (path), viewer (path of
 -- model-viewer.min.js, or false for a page without the 3D view), progress
 -- (a function(done) following the deviation from the reference).
 function M.report(mesh, opts)
@@ -546,7 +571,10 @@ function M.report(mesh, opts)
   end
   opts = check_opts(opts)
   local name = opts.name or "mesh"
-  local ref = opts.reference
+  local path_ref = type(opts.reference) == "string" and opts.reference or nil
+  local loaded_ref <close> = path_ref and load_reference(path_ref) or nil
+  local ref = loaded_ref or opts.reference
+  local ref_name = opts.reference_name or (path_ref and path_ref:match("[^/]*$")) or "reference"
   local q = ref and opts.progress and mesh:quality(ref, { progress = opts.progress }) or mesh:quality(ref)
   local sizes, nb = element_measures(mesh)
   local sbars, sedges = {}, {}
@@ -561,13 +589,13 @@ function M.report(mesh, opts)
   local rq
   if ref then
     rq = ref:quality()
-    rows[1] = { name = opts.reference_name or "reference", state = "reference", q = rq }
+    rows[1] = { name = ref_name, state = "reference", q = rq }
   end
   rows[#rows + 1] = { name = name, state = ref and "result" or "-", q = q }
   local summary = {
     name = name, quality = q, reference_quality = rq,
     row = M.row(q, name, ref and "result" or nil),
-    reference_row = rq and M.row(rq, opts.reference_name or "reference", "reference") or nil,
+    reference_row = rq and M.row(rq, ref_name, "reference") or nil,
     text = M.text(q, name),
     histograms = { stretch = q.histogram, size = zcounts, size_max = q.size_max, valence = vlist },
     hausdorff = q.hausdorff, hausdorff_rel = q.hausdorff_rel,

@@ -1,10 +1,11 @@
 /* scan_digest.c - digests of fast-pass simplifications, built twice: once
- * against the library as it is, once with src/simplify.c compiled with
- * FEMLOD_SIMPLIFY_MARKED_SCAN=1 (band_vertex then finds a vertex's edges by
- * the marked scan everywhere, not one side per face at interior vertices of
- * an oriented mesh). The test scan_equivalence (tests/scan_compare.cmake)
- * runs both and requires identical lines: the one-side scan must find the
- * same edges, so the passes make the same choices (docs/simplify.md
+ * against the library as it is, once with every file of src/simplify/
+ * compiled with FEMLOD_SIMPLIFY_MARKED_SCAN=1 (band_vertex, fast.c, then
+ * finds a vertex's edges by the marked scan everywhere, not one side per
+ * face at interior vertices of an oriented mesh). The test
+ * scan_equivalence (tests/scan_compare.cmake) runs both and requires
+ * identical lines: the one-side scan must find the same edges, so the
+ * passes make the same choices (docs/simplify.md
  * "Fast passes").
  *
  * Usage: scan_digest DATA-FOLDER. Each line: case, output triangles,

@@ -127,6 +127,51 @@ function M.exists(path)
   return false
 end
 
+-- A CSV file (a sweep's results.csv) as a list of rows (name -> text) and
+-- the header, RFC 4180 quoting.
+function M.read_csv(file)
+  local text = assert(M.readfile(file), file)
+  local rows, header = {}, nil
+  local pos = 1
+  while pos <= #text do
+    local fields = {}
+    while true do
+      local v
+      if text:sub(pos, pos) == '"' then
+        local s, i = {}, pos + 1
+        while true do
+          local q = text:find('"', i, true)
+          s[#s + 1] = text:sub(i, q - 1)
+          if text:sub(q + 1, q + 1) == '"' then
+            s[#s + 1] = '"'
+            i = q + 2
+          else
+            pos = q + 1
+            break
+          end
+        end
+        v = table.concat(s)
+      else
+        local e = text:find("[,\n]", pos) or #text + 1
+        v = text:sub(pos, e - 1)
+        pos = e
+      end
+      fields[#fields + 1] = v
+      local c = text:sub(pos, pos)
+      pos = pos + 1
+      if c ~= "," then break end
+    end
+    if not header then
+      header = fields
+    else
+      local row = {}
+      for i, k in ipairs(header) do row[k] = fields[i] end
+      rows[#rows + 1] = row
+    end
+  end
+  return rows, header
+end
+
 -- s single-quoted for sh.
 function M.quote(s)
   return "'" .. tostring(s):gsub("'", "'\\''") .. "'"

@@ -654,6 +654,20 @@ do
   T.check(text:find("\nfandisk%.obj %([^)]*%) | refined near a corner | " .. refined .. " | "), "lod.lua: the refined row")
   T.check(T.exists(ex_out .. "/fandisk.flh"), "lod.lua saved the hierarchy")
 
+  -- The sweep's recipe as is, without parameters: its defaults (target 3000,
+  -- min_stretch 0.2), mesh.obj in the current folder; a bad target still
+  -- says so.
+  os.remove(ex_out .. "/mesh.obj")
+  code, text, err = T.runner(FEMLOD, ERR).sh("cd " .. quote(ex_out) .. " && " .. quote(FEMLOD) .. " run " .. quote(P.examples .. "/sweep.lua"))
+  T.eq(code, 0, "examples/sweep.lua runs without parameters: " .. err)
+  T.eq(err, "", "sweep.lua: nothing on stderr")
+  T.check(text:find("^fandisk%.obj %([^)]*%) | target 3000, stretch >= 0%.2 | 3000 | "), "sweep.lua's defaults: " .. text)
+  T.eq(T.exists(ex_out .. "/mesh.obj") and femlod.load(ex_out .. "/mesh.obj"):counts().triangles, 3000,
+    "sweep.lua wrote mesh.obj in the current folder")
+  code, text, err = run(P.examples .. "/sweep.lua", "target=many", "out_dir=" .. ex_out)
+  T.eq(code, 1, "sweep.lua target=many fails")
+  T.check(err:find("sweep%.lua:%d+: target: integer expected, got many\n$"), "sweep.lua names the bad target: " .. err)
+
   -- The CAE recipe: simplify to 12k, refine curvature, rescale (docs/guide.md).
   code, text, err = run(P.examples .. "/recipe_cae.lua")
   T.eq(code, 0, "examples/recipe_cae.lua runs: " .. err)

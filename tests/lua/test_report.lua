@@ -68,6 +68,50 @@ do
 end
 -- }======
 
+-- {====== the reference as a path, as `femlod report --reference` takes it
+do
+  local file = P.shared .. "/fandisk.obj"
+  local r = femlod.report(mesh, { reference = file, name = "fan2k" })
+  local q = mesh:quality(input)
+  T.eq(r.hausdorff, q.hausdorff, "path reference: the deviation from the mesh in the file")
+  T.eq(r.hausdorff_rel, q.hausdorff_rel, "path reference: relative deviation")
+  T.eq(r.reference_row, report.row(input, "fandisk.obj", "reference"), "path reference: named by its file")
+  T.eq(r.row, report.row(q, "fan2k", "result"), "path reference: the result's row")
+  r = femlod.report(mesh, { reference = file, reference_name = "input" })
+  T.eq(r.reference_row, report.row(input, "input", "reference"), "path reference: reference_name wins")
+  local page = path("pathref.html")
+  os.remove(page)
+  femlod.report(mesh, { reference = file, html = page, viewer = false })
+  local s = T.readfile(page) or ""
+  T.check(s:find('<td class="name">fandisk%.obj %([^)]*%)</td><td class="name">reference</td><td>12946</td>'),
+    "path reference: its row on the page")
+  T.check(s:find('<p id="deviation">'), "path reference: the deviation on the page")
+  os.remove(page)
+  -- femlod.load's errors, at the caller's line
+  local missing = path("missing.obj")
+  os.remove(missing)
+  local line = T.line() + 1
+  local ok, msg = pcall(function() femlod.report(mesh, { reference = missing }) end)
+  T.eq(ok, false, "a missing reference file raises")
+  T.eq(msg and msg:match("[^/]*$"), "report_missing.obj: cannot open: No such file or directory",
+    "a missing reference: femlod.load's message")
+  T.check(msg and msg:find("^[^:]*test_report%.lua:" .. line .. ": "), "a missing reference: at the caller's line: "
+    .. tostring(msg))
+  T.checkerr("test_report%.lua:%d+: [^:]*README%.md: unknown file extension", function()
+    femlod.report(mesh, { reference = P.examples .. "/../README.md" })
+  end)
+  -- A recorded run lists the reference among the files read.
+  local recipe, rec = path("pathref.lua"), path("pathref.json")
+  T.writefile(recipe, "local m <close> = femlod.load(params.mesh)\n"
+    .. "print(femlod.report(m, { reference = params.ref }).reference_row)\n")
+  local code, out, err = run("--record", rec, "run", recipe, "mesh=" .. P.data .. "/tetra.off", "ref=" .. file)
+  T.eq(code, 0, "report with a path reference in a recorded run: " .. err)
+  T.check(out:find("^fandisk%.obj %([^)]*%) | reference | 12946 | "), "the reference's row: " .. out)
+  T.check((T.readfile(rec) or ""):find('"path":%s*"' .. file:gsub("%p", "%%%0") .. '",%s*"sha256"'),
+    "the record lists the reference as read")
+end
+-- }======
+
 -- {====== pages
 local page = path("fan2k.html")
 os.remove(page)
@@ -163,8 +207,10 @@ T.checkerr("bad argument #1 to 'report' %(femlod.Mesh expected, got femlod.Hiera
 T.checkerr("test_report%.lua:%d+: bad argument #2 to 'report' %(unknown option 'htm'; valid: html, name, "
   .. "progress, reference, reference_name, title, viewer%)", function() femlod.report(mesh, { htm = "x" }) end)
 T.checkerr("bad argument #2 to 'report' %(table expected, got string%)", femlod.report, mesh, "x.html")
-T.checkerr("bad argument #2 to 'report' %(reference: femlod.Mesh expected, got table%)", femlod.report, mesh,
-  { reference = {} })
+T.checkerr("bad argument #2 to 'report' %(reference: femlod.Mesh or path expected, got table%)", femlod.report,
+  mesh, { reference = {} })
+T.checkerr("bad argument #2 to 'report' %(reference: femlod.Mesh or path expected, got femlod.Hierarchy%)",
+  femlod.report, mesh, { reference = h })
 T.checkerr("bad argument #2 to 'report' %(html: string expected, got number%)", femlod.report, mesh, { html = 1 })
 T.checkerr("bad argument #2 to 'report' %(viewer: path or false expected, got boolean%)", femlod.report, mesh,
   { viewer = true })
@@ -253,6 +299,46 @@ do
   code, out, err = run("report", P.tmp .. "/missing.obj")
   T.eq(code, 1, "missing mesh: exit 1")
   T.eq(err, "femlod: " .. P.tmp .. "/missing.obj: cannot open: No such file or directory\n", "names the file")
+
+  -- $FEMLOD_MODEL_VIEWER: a readable file is the viewer inlined, one that
+  -- cannot be read an error naming the variable and its value (never
+  -- another copy taken silently); empty is unset; pages without the view
+  -- do not look at it.
+  local function with_env(value, ...)
+    local parts = { "FEMLOD_MODEL_VIEWER=" .. quote(value), quote(P.femlod) }
+    for i = 1, select("#", ...) do parts[#parts + 1] = quote((select(i, ...))) end
+    return R.sh(table.concat(parts, " "))
+  end
+  local custom = path("custom_viewer.js")
+  T.writefile(custom, "console.log('femlod test viewer');\n")
+  os.remove(html)
+  code, out, err = with_env(custom, "report", small, "--html", html)
+  T.eq(code, 0, "FEMLOD_MODEL_VIEWER set to a file: " .. err)
+  T.check((T.readfile(html) or ""):find("console.log('femlod test viewer');", 1, true),
+    "FEMLOD_MODEL_VIEWER: that file is the viewer on the page")
+  for _, bad in ipairs { { P.tmp .. "/no_such_viewer.js", "No such file or directory" },
+    { P.tmp, "Is a directory" } } do
+    os.remove(html)
+    code, out, err = with_env(bad[1], "report", small, "--html", html)
+    T.eq(code, 1, "FEMLOD_MODEL_VIEWER=" .. bad[1] .. ": exit 1")
+    T.eq(err, "femlod: FEMLOD_MODEL_VIEWER is '" .. bad[1] .. "', which cannot be read (" .. bad[2]
+      .. "): set it to the path of model-viewer.min.js, or unset it to use femlod's own copy\n",
+      "FEMLOD_MODEL_VIEWER=" .. bad[1] .. ": the variable, its value and why")
+    T.check(not T.exists(html), "no page with a bad FEMLOD_MODEL_VIEWER")
+  end
+  code, out, err = with_env(P.tmp .. "/no_such_viewer.js", "report", small, "--html", html, "--no-viewer")
+  T.eq(code, 0, "--no-viewer does not look at FEMLOD_MODEL_VIEWER: " .. err)
+  code, out, err = with_env("", "report", small, "--html", html)
+  T.eq(code, 0, "FEMLOD_MODEL_VIEWER empty: femlod's own copy: " .. err)
+  T.check((T.readfile(html) or ""):find("<model-viewer", 1, true), "empty FEMLOD_MODEL_VIEWER: the page has its view")
+  -- In a recipe: at the line that asked for the page.
+  local rp = path("viewer_env.lua")
+  T.writefile(rp, "local m <close> = femlod.load(params.mesh)\nfemlod.report(m, { html = params.html })\n")
+  code, out, err = with_env(P.tmp .. "/no_such_viewer.js", "run", rp, "mesh=" .. small, "html=" .. html)
+  T.eq(code, 1, "recipe with a bad FEMLOD_MODEL_VIEWER: exit 1")
+  T.check(err:find("^femlod: " .. rp:gsub("%p", "%%%0") .. ":2: FEMLOD_MODEL_VIEWER is '"), "at the recipe's line: " .. err)
+  os.remove(custom)
+  os.remove(html)
   os.remove(small)
 end
 -- }======

@@ -23,49 +23,7 @@ local function sha256sum(file)
   return s:match("^(%x+)")
 end
 
--- results.csv as a list of rows (name -> text), RFC 4180 quoting.
-local function read_csv(file)
-  local text = assert(T.readfile(file), file)
-  local rows, header = {}, nil
-  local pos = 1
-  while pos <= #text do
-    local fields = {}
-    while true do
-      local v
-      if text:sub(pos, pos) == '"' then
-        local s, i = {}, pos + 1
-        while true do
-          local q = text:find('"', i, true)
-          s[#s + 1] = text:sub(i, q - 1)
-          if text:sub(q + 1, q + 1) == '"' then
-            s[#s + 1] = '"'
-            i = q + 2
-          else
-            pos = q + 1
-            break
-          end
-        end
-        v = table.concat(s)
-      else
-        local e = text:find("[,\n]", pos) or #text + 1
-        v = text:sub(pos, e - 1)
-        pos = e
-      end
-      fields[#fields + 1] = v
-      local c = text:sub(pos, pos)
-      pos = pos + 1
-      if c ~= "," then break end
-    end
-    if not header then
-      header = fields
-    else
-      local row = {}
-      for i, k in ipairs(header) do row[k] = fields[i] end
-      rows[#rows + 1] = row
-    end
-  end
-  return rows, header
-end
+local read_csv = T.read_csv
 
 -- The manifest's digest and every "sha256" in it, in order (cJSON's layout).
 local function manifest_hashes(dir)

@@ -1,0 +1,528 @@
+/*
+ * simplify.c - quality-controlled edge-collapse simplification: the entry
+ * point femlod_simplify, its options and the order of its phases.
+ *
+ * Implements paper.md section 4 (Lee et al., "Mesh simplification and
+ * adaptive LOD for finite element mesh generation") as corrected and settled
+ * by method-notes.md; docs/simplify.md records the choices and the
+ * measurements behind them, docs/algorithms.md maps each formula to its
+ * function. The files of src/simplify/, top down (each calls only the ones
+ * below it; simp.h says what they share):
+ *
+ *   simplify.c        options (resolve_options), phases (simplify_run),
+ *                     output (make_output)
+ *   fast.c            4.2.3 order above fast_above x target: passes in
+ *                     priority bands (band_run), serial and parallel
+ *   queue.c           4.2.3 greedy order: the queue (run_queue,
+ *                     reevaluate_ring), 4.2 step 4 collapse, 5.1 log
+ *   candidate.c       4.2.1 candidates, 4.2.2 validity (C1-C4, foldover,
+ *                     link condition, cones, deviation), 4.2.3 priority
+ *   intersect_grid.c  4.2.2 no crossing: the intersection test and its grid
+ *   setup.c           4.1 (1)-(4) quadrics, features, connectivity
+ *   pool.c            threads
+ *
+ * Phases (simplify_run): the stretch pre-phase (4.2.2: only edges of
+ * triangles below min_stretch, collapses that raise the least stretch),
+ * then optionally the fast passes, then the exact queue, with a final
+ * retry of every edge when it runs dry.
+ *
+ * Invariants: the output depends only on the input and the options (not
+ * on the thread count, pointer values or timing); it stops short with
+ * FEMLOD_OK and says why; every failure frees what the run made.
+ */
+#include "simp.h"
+
+#include <assert.h>
+#if defined(__GLIBC__)
+#include <malloc.h> /* malloc_trim: release_freed_memory */
+#endif
+#include <stdlib.h>
+#include <unistd.h>
+
+/* Tunables, fixed by the measurements in docs/simplify.md; -D overrides
+ * them for experiments only. */
+#ifndef FEMLOD_SIMPLIFY_DEFAULT_TOLERANCE
+#define FEMLOD_SIMPLIFY_DEFAULT_TOLERANCE 4.0 /* times (mean input edge)^2 */
+#endif
+#ifndef FEMLOD_SIMPLIFY_GRID_CELL
+#define FEMLOD_SIMPLIFY_GRID_CELL 1.0 /* grid cell edge / mean edge length */
+#endif
+
+/* {====== options and set-up */
+
+static int bad_number(double x) { return isnan(x) || isinf(x); }
+
+/* Resolves the options (zero: default, negative: off). */
+static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, size_t nt, double diag,
+                                     double mean_edge, double size_max, femlod_error *err) {
+    if (bad_number(o->ratio) || bad_number(o->tolerance) || bad_number(o->max_deviation) ||
+        bad_number(o->min_stretch) || bad_number(o->max_size) || bad_number(o->feature_angle) ||
+        bad_number(o->feature_weight) || bad_number(o->max_normal_change))
+        return fl_error(err, FEMLOD_EINPUT, "simplify: options must be finite numbers");
+    if (o->target && o->ratio != 0.0)
+        return fl_error(err, FEMLOD_EINPUT, "simplify: give target or ratio, not both");
+    if (o->ratio < 0.0 || o->ratio > 1.0)
+        return fl_error(err, FEMLOD_EINPUT, "simplify: ratio %g is outside (0, 1]", o->ratio);
+    if (o->min_stretch > 1.0)
+        return fl_error(err, FEMLOD_EINPUT, "simplify: min_stretch %g is above 1", o->min_stretch);
+    if (o->max_valence > 0 && o->max_valence < 3)
+        return fl_error(err, FEMLOD_EINPUT, "simplify: max_valence %d is below 3", o->max_valence);
+    if (o->feature_angle > 180.0 || o->max_normal_change > 180.0)
+        return fl_error(err, FEMLOD_EINPUT, "simplify: angles are degrees in [0, 180]");
+    if (bad_number(o->fast_above) || (o->fast_above > 0.0 && o->fast_above < 1.0))
+        return fl_error(err, FEMLOD_EINPUT, "simplify: fast_above %g is not a factor >= 1", o->fast_above);
+    S->fast = o->fast_above >= 1.0 ? o->fast_above : 0.0;
+    if (o->threads < 0) return fl_error(err, FEMLOD_EINPUT, "simplify: threads %d is negative", o->threads);
+    S->nthreads = o->threads;
+    if (S->nthreads == 0) {
+        long np = sysconf(_SC_NPROCESSORS_ONLN);
+        S->nthreads = np < 1 ? 1 : (np > 16 ? 16 : (int)np);
+    }
+    if (S->nthreads > 16) S->nthreads = 16;
+    S->target = o->target;
+    if (o->ratio > 0.0) S->target = (size_t)floor(o->ratio * (double)nt + 0.5);
+
+    /* C1: the default is scale-aware: docs/simplify.md "Defaults" */
+    S->tol_on = o->tolerance >= 0.0;
+    S->tol = o->tolerance > 0.0 ? o->tolerance : FEMLOD_SIMPLIFY_DEFAULT_TOLERANCE * mean_edge * mean_edge;
+    S->dev_on = o->max_deviation > 0.0;
+    S->maxdev = o->max_deviation;
+    S->maxdev2 = S->maxdev * S->maxdev;
+    S->st_on = o->min_stretch >= 0.0;
+    S->minst = o->min_stretch > 0.0 ? o->min_stretch : 0.2;
+    if (!S->st_on) S->minst = 0.0;
+    S->minst2 = S->minst * S->minst;
+    S->sz_on = o->max_size >= 0.0;
+    S->maxsz = o->max_size > 0.0 ? o->max_size : mx(0.1 * diag, 2.0 * size_max);
+    S->maxsz2 = S->maxsz * S->maxsz;
+    S->val_on = o->max_valence >= 0;
+    S->maxval = o->max_valence > 0 ? o->max_valence : 12;
+    S->feat_angle = o->feature_angle > 0.0 ? o->feature_angle : (o->feature_angle < 0.0 ? -1.0 : 40.0);
+    S->feat_w = o->feature_weight > 0.0 ? o->feature_weight : (o->feature_weight < 0.0 ? 0.0 : 2.0);
+    S->cone_on = o->max_normal_change >= 0.0;
+    S->max_nc = o->max_normal_change > 0.0 ? o->max_normal_change : 60.0;
+    if (S->cone_on) {
+        S->cos_nc = cos(S->max_nc * PI / 180.0);
+        S->cos_nc2 = S->cos_nc * S->cos_nc;
+    } else {
+        S->cos_nc = 0.0; /* flips only */
+        S->cos_nc2 = 0.0;
+    }
+    S->lim_sz2 = S->sz_on ? S->maxsz2 : __builtin_inf();
+    S->lim_turn2 = S->cos_nc > 0.0 ? S->cos_nc2 : 0.0; /* d^2 < 0 never holds */
+    S->lim_st2 = -1.0;                                 /* set per phase */
+    S->keep_boundary = o->keep_boundary != 0;
+    S->area_w = o->area_weighted != 0;
+    (void)mean_edge;
+    return FEMLOD_OK;
+}
+
+/* The set-up in the order its parts need: the mesh measured, the options
+ * resolved against it, then what depends on them, and the grid. */
+static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simplify_options *o, size_t *dropped,
+                           femlod_error *err) {
+    simp_measure m;
+    femlod_status st = fl_simp_setup_mesh(S, mesh, o, dropped, &m, err);
+    if (st == FEMLOD_OK) st = resolve_options(S, o, mesh->nt, m.diag, m.mean_edge, m.size_max, err);
+    if (st == FEMLOD_OK) st = fl_simp_setup_features(S, mesh, o, err);
+    if (st == FEMLOD_OK &&
+        !fl_simp_build_grid(S, m.mean_edge > 0.0 ? FEMLOD_SIMPLIFY_GRID_CELL * m.mean_edge : 1.0))
+        st = fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    return st;
+}
+
+/* Everything the run holds (what it never made is NULL). */
+static void simp_free(simp *S) {
+    fl_simp_free_eval(S);
+    free(S->rlist);
+    free(S->rkind);
+    free(S->rtol);
+    free(S->rrho);
+    free(S->slot_of);
+    free(S->pos);
+    free(S->q);
+    free(S->node);
+    free(S->fstart);
+    free(S->fcount);
+    free(S->val);
+    free(S->vflag);
+    free(S->fdeg);
+    free(S->vmark);
+    free(S->vlock);
+    free(S->vbest);
+    free(S->refs);
+    free(S->face);
+    free(S->fin);
+    free(S->tedge);
+    free(S->fsz);
+    free(S->cone);
+    free(S->fmark);
+    free(S->fmade);
+    free(S->fpt);
+    free(S->pnext);
+    free(S->ev);
+    free(S->enf);
+    free(S->edge);
+    free(S->emark);
+    free(S->ehint);
+    free(S->eopt);
+    fl_heap_free(&S->heap);
+    fl_grid_free(&S->grid);
+    fl_simp_free_scratch(S);
+}
+
+/* }====== */
+
+/* {====== phases */
+
+/* The phases: the stretch pre-phase (4.2.2), the fast passes (fast_above),
+ * the exact queue with a final retry. 0 on ENOMEM, 2 cancelled, 1 otherwise;
+ * *why says why it stopped. */
+static int finish(simp *S, const femlod_simplify_options *o, size_t live0, size_t *nextp,
+                  femlod_stop_reason *why);
+
+static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_reason *why, size_t *live0p,
+                        size_t *nextp) {
+    size_t live0 = S->live, next = 0;
+    *live0p = live0;
+    *why = FEMLOD_STOP_NO_VALID_EDGE;
+    /* pre-phase (4.2.2): only edges of triangles below min_stretch */
+#if FEMLOD_SIMPLIFY_STATS
+    double t1 = now_seconds();
+#endif
+    if (S->st_on) {
+        S->phase = 0;
+        S->lim_st2 = -1.0; /* the pre-phase compares with the replaced faces instead */
+        size_t queued = fl_simp_evaluate_all(S, o, 0.0);
+        if (S->cancelled) {
+            *why = FEMLOD_STOP_CANCELLED;
+            return 2;
+        }
+        if (queued) {
+            int r = fl_simp_run_queue(S, o, live0, &next);
+            if (r != 1) {
+                if (r == 2) *why = FEMLOD_STOP_CANCELLED;
+                return r;
+            }
+        }
+        while (fl_heap_size(&S->heap)) fl_heap_pop(&S->heap, NULL);
+    }
+    STAT_TIME(1, t1);
+    S->phase = 1;
+    S->lim_st2 = S->st_on ? S->minst2 : -1.0;
+    if (S->fast > 0.0) {
+        double fl = S->fast * (double)S->target;
+        size_t floor_live = fl < (double)SIZE_MAX ? (size_t)fl : SIZE_MAX;
+        if (S->live > floor_live) {
+            int r = fl_simp_band_run(S, o, floor_live, live0, &next);
+            if (r != 1) {
+                if (r == 2) *why = FEMLOD_STOP_CANCELLED;
+                return r;
+            }
+        }
+    }
+    *nextp = next;
+    return finish(S, o, live0, nextp, why);
+}
+
+/* The exact order down to S->target: evaluate everything not queued, run
+ * the queue, again until the target or until a round makes no collapse.
+ * S->binding gets the check that refused most in that last round (when no
+ * edge is valid). Returns as simplify_run. */
+static int finish(simp *S, const femlod_simplify_options *o, size_t live0, size_t *nextp,
+                  femlod_stop_reason *why) {
+    size_t next = *nextp;
+#if FEMLOD_SIMPLIFY_STATS
+    double t4 = now_seconds();
+#endif
+    size_t last_retry = (size_t)-1;
+    size_t before[FEMLOD_REJECT_COUNT] = {0};
+    *why = FEMLOD_STOP_NO_VALID_EDGE;
+    for (;;) {
+        if (S->live <= S->target) break;
+        /* evaluate everything not queued: at the start, and again when the
+         * queue runs dry, for edges refused for reasons outside their ring
+         * (an intersection with a triangle that has moved away since) */
+        if (last_retry == S->collapses) break;
+        last_retry = S->collapses;
+        size_t goal = live0 > S->prog_target ? live0 - S->prog_target : 1;
+        double done = (double)(live0 - S->live) / (double)goal;
+#if FEMLOD_SIMPLIFY_STATS
+        double tq0 = now_seconds();
+#endif
+        memcpy(before, S->rejected, sizeof before);
+        size_t queued = fl_simp_evaluate_all(S, o, done > 1.0 ? 1.0 : done);
+        if (S->cancelled) {
+            *why = FEMLOD_STOP_CANCELLED;
+            return 2;
+        }
+        if (!queued) break;
+        if (S->oom) return 0;
+#if FEMLOD_SIMPLIFY_STATS
+        double tq1 = now_seconds();
+        size_t c0 = S->collapses, e0 = S->stats.evals;
+#endif
+        int r = fl_simp_run_queue(S, o, live0, &next);
+        *nextp = next;
+#if FEMLOD_SIMPLIFY_STATS
+        fprintf(stderr, "finish: evaluate_all %.3f s (%zu queued), queue %.3f s, %zu collapses, %.1f evals each (main thread)\n",
+                tq1 - tq0, queued, now_seconds() - tq1, S->collapses - c0,
+                (double)(S->stats.evals - e0) / (double)(S->collapses - c0 ? S->collapses - c0 : 1));
+#endif
+        if (r != 1) {
+            if (r == 2) *why = FEMLOD_STOP_CANCELLED;
+            return r;
+        }
+    }
+    if (S->live <= S->target) *why = FEMLOD_STOP_TARGET;
+    /* the check that refused most in the last round */
+    S->binding = FEMLOD_REJECT_COUNT;
+    size_t most = 0;
+    for (int k = 0; k < FEMLOD_REJECT_COUNT; k++)
+        if (S->rejected[k] - before[k] > most) {
+            most = S->rejected[k] - before[k];
+            S->binding = k;
+        }
+    STAT_TIME(4, t4);
+    return 1;
+}
+
+/* }====== */
+
+/* {====== output */
+
+static int cmp_mkey(const void *a, const void *b) {
+    const mkey *x = a, *y = b;
+    if (x->key != y->key) return x->key < y->key ? -1 : 1;
+    return (x->id > y->id) - (x->id < y->id);
+}
+
+/* The surviving vertices and faces as a mesh (and the log's output node
+ * ids): deterministic orders, independent of the slots. */
+static femlod_status make_output(simp *S, femlod_mesh **out, femlod_collapse_log *log) {
+    uint32_t *map = fl_populate(fl_alloc(S->nv, sizeof *map), S->nv * sizeof *map);
+    if (!map) return FEMLOD_ENOMEM;
+    /* output vertices in increasing node id: surviving input vertices in
+     * input order, then the new ones in collapse order */
+    mkey *order = fl_alloc(S->nv, sizeof *order);
+    if (!order) {
+        free(map);
+        return FEMLOD_ENOMEM;
+    }
+    size_t nv = 0;
+    for (size_t v = 0; v < S->nv; v++) {
+        map[v] = UINT32_MAX;
+        if (!(S->vflag[v] & V_DEAD) && S->fcount[v] > 0) {
+            order[nv].key = S->node[v];
+            order[nv].id = (uint32_t)v;
+            nv++;
+        }
+    }
+    qsort(order, nv, sizeof *order, cmp_mkey);
+    for (size_t x = 0; x < nv; x++) map[order[x].id] = (uint32_t)x;
+    free(order);
+    femlod_mesh *m = fl_mesh_alloc(nv, S->live);
+    if (!m) {
+        free(map);
+        return FEMLOD_ENOMEM;
+    }
+    for (size_t v = 0; v < S->nv; v++)
+        if (map[v] != UINT32_MAX) memcpy(m->pos + 3 * (size_t)map[v], S->pos + 3 * v, 3 * sizeof(double));
+    /* triangles in the order of the input triangles they descend from */
+    uint32_t *byin = fl_populate(fl_alloc(S->nt_in, sizeof *byin), S->nt_in * sizeof *byin);
+    if (!byin) {
+        free(map);
+        femlod_mesh_free(m);
+        return FEMLOD_ENOMEM;
+    }
+    memset(byin, 0xff, S->nt_in * sizeof *byin);
+    for (size_t f = 0; f < S->nt; f++)
+        if (face_alive(S, (uint32_t)f)) byin[S->fin[f]] = (uint32_t)f;
+    size_t w = 0;
+    for (size_t x = 0; x < S->nt_in; x++) {
+        uint32_t f = byin[x];
+        if (f == UINT32_MAX) continue;
+        for (int c = 0; c < 3; c++) m->tri[3 * w + c] = map[S->face[f].v[c]];
+        w++;
+    }
+    free(byin);
+    if (log) {
+        log->out_nodes = fl_alloc(nv, sizeof *log->out_nodes);
+        if (!log->out_nodes) {
+            free(map);
+            femlod_mesh_free(m);
+            return FEMLOD_ENOMEM;
+        }
+        for (size_t v = 0; v < S->nv; v++)
+            if (map[v] != UINT32_MAX) log->out_nodes[map[v]] = S->node[v];
+        log->nv_out = nv;
+    }
+    free(map);
+    *out = m;
+    return FEMLOD_OK;
+}
+
+const char *femlod_stop_reason_name(femlod_stop_reason reason) {
+    switch (reason) {
+    case FEMLOD_STOP_TARGET: return "target";
+    case FEMLOD_STOP_NO_VALID_EDGE: return "no_valid_edge";
+    case FEMLOD_STOP_CANCELLED: return "cancelled";
+    }
+    return "unknown";
+}
+
+const char *femlod_reject_name(femlod_reject reason) {
+    static const char *const names[FEMLOD_REJECT_COUNT] = {
+        "tolerance", "deviation", "stretch", "size", "valence", "foldover", "topology", "intersection"};
+    return (unsigned)reason < FEMLOD_REJECT_COUNT ? names[reason] : "unknown";
+}
+
+/* After a large run, gives the freed working memory back to the system.
+ * glibc raises its mmap threshold as large blocks are freed (up to 32 MB),
+ * so the next run's arrays come from the heap, around blocks still in use,
+ * and what a run frees stays resident: measured on cover.obj subdivided once
+ * (311k triangles) to 12,000, nine runs in one process, peak resident 101 ->
+ * 131 MB and 30 -> 112 MB still resident after a run; with this call the
+ * peak stays at 101-104 MB and 13-14 MB after each run (docs/simplify.md,
+ * "Memory across runs"). Runs below 65,536 triangles skip it (a sweep of
+ * small runs should not pay for a heap walk each time). */
+static void release_freed_memory(size_t triangles) {
+#if defined(__GLIBC__)
+    if (triangles >= 65536) (void)malloc_trim(0);
+#else
+    (void)triangles;
+#endif
+}
+
+femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, const femlod_mesh *mesh,
+                              const femlod_simplify_options *options, femlod_simplify_result *result,
+                              femlod_error *err) {
+    assert(out && mesh); /* femlod.h: NULL handles are programming errors */
+    double t0 = now_seconds();
+    femlod_simplify_options defaults = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    const femlod_simplify_options *o = options ? options : &defaults;
+    simp *S = calloc(1, sizeof *S);
+    if (!S) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    size_t dropped = 0;
+    femlod_status st = setup(S, mesh, o, &dropped, err);
+    STAT_TIME(0, t0);
+    if (st != FEMLOD_OK) {
+        simp_free(S);
+        free(S);
+        return st;
+    }
+    if (out_log) {
+        S->log = fl_log_new(mesh->nv, S->nt / 2 + 16);
+        if (!S->log) {
+            simp_free(S);
+            free(S);
+            return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+        }
+    }
+    /* Past the target (docs/design.md "The hierarchy below the target"):
+     * the output is taken at the target, then the exact order goes on down
+     * to the floor, extending only the log. */
+    int extend = S->log && o->hierarchy_floor > 0 && S->target > 0 && o->hierarchy_floor < S->target;
+    size_t floor_live = extend ? o->hierarchy_floor : 0;
+    S->prog_target = extend ? floor_live : S->target;
+    femlod_stop_reason why = FEMLOD_STOP_NO_VALID_EDGE, hwhy;
+    size_t live0 = 0, next = 0;
+    int r = simplify_run(S, o, &why, &live0, &next);
+    femlod_mesh *m = NULL;
+    double t5 = now_seconds();
+    (void)t5;
+    size_t out_collapses = S->collapses, out_rejected[FEMLOD_REJECT_COUNT];
+    memcpy(out_rejected, S->rejected, sizeof out_rejected);
+    if (r == 0 || make_output(S, &m, S->log) != FEMLOD_OK) {
+        femlod_collapse_log_free(S->log);
+        simp_free(S);
+        free(S);
+        return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    }
+    hwhy = why;
+    if (S->log) {
+        S->log->prephase = S->prephase;
+        S->log->front = S->collapses;
+        S->log->binding = why == FEMLOD_STOP_NO_VALID_EDGE ? S->binding : FEMLOD_REJECT_COUNT;
+    }
+    if (extend && r == 1 && why == FEMLOD_STOP_TARGET) {
+        size_t target0 = S->target;
+        S->target = floor_live;
+        r = finish(S, o, live0, &next, &hwhy);
+        if (r == 0) {
+            femlod_mesh_free(m);
+            femlod_collapse_log_free(S->log);
+            simp_free(S);
+            free(S);
+            return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+        }
+        /* a cancel here keeps the result at the target: the log is as far
+         * as it got, every state of it valid */
+        S->log->binding = hwhy == FEMLOD_STOP_NO_VALID_EDGE ? S->binding : FEMLOD_REJECT_COUNT;
+        S->target = target0;
+    }
+#if FEMLOD_SIMPLIFY_STATS
+    STAT_TIME(5, t5);
+    fprintf(stderr, "simplify seconds: setup %.3f pre-phase %.3f first evaluation %.3f passes %.3f queue %.3f output %.3f\n",
+            S->stats.t[0], S->stats.t[1], S->stats.t[2], S->stats.t[3], S->stats.t[4], S->stats.t[5]);
+    fprintf(stderr, "busy in tasks per worker: %.3f %.3f %.3f %.3f; waiting for the last thread at the end of parallel steps: %.3f thread-seconds\n", S->stats.tstage[10], S->stats.tstage[11], S->stats.tstage[12], S->stats.tstage[13], S->stats.tstage[30]);
+    fprintf(stderr, "band attempts %zu, below tau on re-evaluation %zu\n", S->stats.attempts, S->stats.attempt_low);
+    fprintf(stderr, "parallel passes: listed %zu / %zu / %zu, seconds %.3f / %.3f / %.3f; %zu sub-passes, %.3f s in tasks\n", S->stats.listed[0],
+            S->stats.listed[1], S->stats.listed[2], S->stats.tstage[0], S->stats.tstage[1], S->stats.tstage[2], S->stats.listed[3], S->stats.tstage[3]);
+    fprintf(stderr, "outside tasks: listing %.3f bucket %.3f tasks %.3f (compaction %.3f) merge %.3f grid %.3f\n", S->stats.tstage[4], S->stats.tstage[5], S->stats.tstage[6], S->stats.tstage[9], S->stats.tstage[7], S->stats.tstage[8]);
+    {
+        const simp_stats *c = &S->stats;
+        double n = S->collapses ? (double)S->collapses : 1.0;
+        fprintf(stderr,
+                "simplify stats per collapse (%zu): bounds %.2f evals %.2f (settle %.2f, prefix fail %.2f) cands %.2f (ok %.2f) "
+                "solves %.2f pops %.2f links %.2f expensive %.2f cells %.1f items %.1f tritri %.1f skipped %.2f deferred %.2f planar %.2f\n",
+                S->collapses, (double)c->bounds / n, (double)c->evals / n, (double)c->settles / n, (double)(c->evals + c->bounds - c->rings) / n,
+                (double)c->cands / n, (double)c->cand_ok / n, (double)c->solves / n, (double)c->pops / n,
+                (double)c->links / n, (double)c->expensive / n, (double)c->cells / n, (double)c->items / n,
+                (double)c->tritri / n, (double)c->skipped / n, (double)c->deferred / n, (double)c->planar / n);
+    }
+#endif
+    if (result) {
+        memset(result, 0, sizeof *result);
+        result->triangles = m->nt;
+        result->vertices = m->nv;
+        result->stop_reason = why;
+        result->collapses = out_collapses;
+        result->prephase_collapses = S->prephase;
+        result->fast_collapses = S->swept;
+        memcpy(result->rejected, out_rejected, sizeof result->rejected);
+        result->hierarchy_triangles = S->live;
+        result->hierarchy_stop = hwhy;
+        result->hierarchy_binding = S->log ? S->log->binding : FEMLOD_REJECT_COUNT;
+        size_t bad = 0;
+        for (size_t f = 0; f < m->nt; f++) {
+            const uint32_t *t = m->tri + 3 * f;
+            double sz;
+            double stv = tri_stretch(m->pos + 3 * (size_t)t[0], m->pos + 3 * (size_t)t[1], m->pos + 3 * (size_t)t[2], &sz);
+            if ((S->st_on && stv < S->minst) || (S->sz_on && sz > S->maxsz)) bad++;
+        }
+        result->violating_input = bad;
+        result->dropped_degenerate = dropped;
+        result->target = S->target;
+        result->tolerance = S->tol_on ? S->tol : FEMLOD_SIMPLIFY_OFF;
+        result->max_deviation = S->dev_on ? S->maxdev : FEMLOD_SIMPLIFY_OFF;
+        result->min_stretch = S->st_on ? S->minst : FEMLOD_SIMPLIFY_OFF;
+        result->max_size = S->sz_on ? S->maxsz : FEMLOD_SIMPLIFY_OFF;
+        result->feature_angle = S->feat_angle > 0.0 ? S->feat_angle : FEMLOD_SIMPLIFY_OFF;
+        result->feature_weight = S->feat_w > 0.0 ? S->feat_w : FEMLOD_SIMPLIFY_OFF;
+        result->max_normal_change = S->cone_on ? S->max_nc : FEMLOD_SIMPLIFY_OFF;
+        result->max_valence = S->val_on ? S->maxval : -1;
+        result->fast_above = S->fast > 0.0 ? S->fast : FEMLOD_SIMPLIFY_OFF;
+        result->threads = S->nthreads;
+        result->seconds = now_seconds() - t0;
+    }
+    *out = m;
+    if (out_log) *out_log = S->log;
+    size_t big = S->nt;
+    simp_free(S);
+    free(S);
+    release_freed_memory(big);
+    return FEMLOD_OK;
+}
+
+/* }====== */
