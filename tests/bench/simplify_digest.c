@@ -74,15 +74,33 @@ int main(int argc, char **argv) {
         {"cover2-fast-50k", "cover.obj", 2, 50000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0, 2},
         {"cover2-fast-12k", "cover.obj", 2, 12000, 0.15, 0.2, 15, 0, 0, 12, 0, 0, 0, 0, 0, 2},
     };
-    for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
+    /* Runs past the target (hierarchy_floor): the mesh must be the base
+     * case's, the log longer (docs/design.md "The hierarchy below the
+     * target"). */
+    static const struct {
+        const char *name, *base;
+        size_t floor;
+    } floors[] = {
+        {"cover-paper-12k-floor", "cover-paper-12k", 1},
+        {"fandisk-paper-floor", "fandisk-paper", 1},
+        {"cover-fast-12k-floor", "cover-fast-12k", 6000},
+    };
+    size_t ncases = sizeof cases / sizeof cases[0], nfloors = sizeof floors / sizeof floors[0];
+    for (size_t c = 0; c < ncases + nfloors; c++) {
         const scase *k = cases + c;
-        if (only && !strstr(k->name, only)) continue;
+        const char *name = c < ncases ? cases[c].name : floors[c - ncases].name;
+        size_t floor = 0;
+        if (c >= ncases) {
+            floor = floors[c - ncases].floor;
+            for (k = cases; strcmp(k->name, floors[c - ncases].base) != 0; k++) {}
+        }
+        if (only && !strstr(name, only)) continue;
         char path[1024];
         snprintf(path, sizeof path, "%s/%s", dir, k->file);
         femlod_error err;
         femlod_mesh *m0 = NULL, *m = NULL;
         if (femlod_mesh_read(&m0, path, NULL, &err) != FEMLOD_OK) {
-            printf("%-20s cannot read: %s\n", k->name, err.message);
+            printf("%-20s cannot read: %s\n", name, err.message);
             continue;
         }
         if (k->levels) {
@@ -106,21 +124,25 @@ int main(int argc, char **argv) {
         o.feature_weight = k->fweight;
         o.fast_above = k->fast;
         o.threads = threads;
+        o.hierarchy_floor = floor;
         femlod_mesh *out = NULL;
         femlod_collapse_log *log = NULL;
         femlod_simplify_result res;
         double t0 = now();
         if (femlod_simplify(&out, &log, m, &o, &res, &err) != FEMLOD_OK) {
-            printf("%-20s error: %s\n", k->name, err.message);
+            printf("%-20s error: %s\n", name, err.message);
             femlod_mesh_free(m);
             continue;
         }
         double t = now() - t0;
         size_t nt = femlod_mesh_triangle_count(out);
         uint64_t hm = digest_mesh(out), hl = digest_log(log);
-        printf("%-20s %7zu tris %7zu collapses (pre %zu) %s  mesh %016llx  log %016llx  %7.3f s\n", k->name, nt,
+        printf("%-20s %7zu tris %7zu collapses (pre %zu) %s  mesh %016llx  log %016llx  %7.3f s\n", name, nt,
                res.collapses, res.prephase_collapses, femlod_stop_reason_name(res.stop_reason),
                (unsigned long long)hm, (unsigned long long)hl, t);
+        if (floor)
+            printf("%-20s %7zu tris in the log's coarsest state (%s), %zu collapses in all\n", "", res.hierarchy_triangles,
+                   femlod_stop_reason_name(res.hierarchy_stop), femlod_collapse_log_count(log));
         fflush(stdout);
         femlod_collapse_log_free(log);
         femlod_mesh_free(out);
