@@ -230,10 +230,11 @@ FL_INTERNAL femlod_status fl_read_off(femlod_mesh **out, const char *data, size_
 FL_INTERNAL femlod_status fl_read_ply(femlod_mesh **out, const char *data, size_t size,
                                       const char *name, femlod_error *err);
 
-/* glTF (io_gltf.cpp, C++ behind a C face). file is the path the data came
- * from, whose folder may hold external buffers; NULL when reading memory
- * (external buffers are then an error). format is the one asked for
- * (FEMLOD_FORMAT_GLB or _GLTF): JSON or GLB is told by the data. */
+/* glTF (io_gltf_read.cpp, io_gltf_write.cpp: C++ behind a C face). file is
+ * the path the data came from, whose folder may hold external buffers; NULL
+ * when reading memory (external buffers are then an error). format is the
+ * one asked for (FEMLOD_FORMAT_GLB or _GLTF): JSON or GLB is told by the
+ * data. */
 FL_INTERNAL femlod_status fl_read_gltf(femlod_mesh **out, const char *data, size_t size,
                                        const char *name, const char *file, femlod_format format,
                                        femlod_error *err);

@@ -1,5 +1,5 @@
 /*
- * io_util.h - what the format readers and writers (io_*.c, io_gltf.cpp)
+ * io_util.h - what the format readers and writers (io_*.c, io_gltf_*.cpp)
  * share, in io_util.c: token quoting and number checks for messages, the
  * line-counting token reader, "FILE:LINE:" and "FILE: byte N:" errors, fan
  * triangulation of polygons, a reader's hand-over of its arrays, and the

@@ -1,4 +1,4 @@
-/* test_gltf.c - glTF in and out (src/io_gltf.cpp; docs/formats.md, "glTF").
+/* test_gltf.c - glTF in and out (src/io_gltf_*.cpp; docs/formats.md, "glTF").
  *
  * Facts checked:
  *   - 2CylinderEngine.glb (examples/data) loads with its node transforms
