@@ -24,7 +24,7 @@
 -- examples/ and of every file of examples/data/ at its top level; commands run with
 -- `sh`, standard error merged into standard output (2>&1), the build folder first on
 -- PATH, in file order, so a block may use what an earlier one wrote. The folder's path is
--- shown as /tmp/femlod-docs.
+-- shown as /tmp/femlod-docs, the build folder's as /usr/local/bin.
 
 local MASKS = {
   -- wall, CPU and ETA times: "0.158 s", "(0.002 s)", "ETA 2 s"
@@ -40,6 +40,8 @@ local MASKS = {
 }
 
 local SHOWN_TMP = "/tmp/femlod-docs"
+-- the build folder, as an installed femlod would be (`--emit-jobs` prints the program path)
+local SHOWN_BIN = "/usr/local/bin"
 
 local function die(msg, status)
   io.stderr:write("outputs.lua: ", msg, "\n")
@@ -152,6 +154,7 @@ local function run_cmds(dir, cmds)
     if not s then die("command did not finish: " .. cmds[i] .. "\n" .. out:sub(pos)) end
     local text = out:sub(pos, s - 1):gsub("\n$", "")
     text = text:gsub(dir:gsub("%p", "%%%0"), SHOWN_TMP)
+    text = text:gsub(bin:gsub("%p", "%%%0"), SHOWN_BIN)
     outs[i], stats[i] = text, tonumber(st)
     pos = e + 1
   end
@@ -206,6 +209,7 @@ end
 local differ, errors, checked, skipped = 0, 0, 0, 0
 
 local function process(file)
+  local errors_before = errors
   local path = abspath(file)
   local text = readfile(path)
   local lines = {}
@@ -293,7 +297,7 @@ local function process(file)
     end
   end
   if dir then check_ok("rm -rf " .. shquote(dir)) end
-  if mode == "write" and changed then
+  if mode == "write" and changed and errors == errors_before then
     writefile(path .. ".tmp", table.concat(out, "\n") .. "\n")
     assert(os.rename(path .. ".tmp", path))
     io.stdout:write("rewrote ", file, "\n")
