@@ -35,6 +35,8 @@ local MASKS = {
   pid = { { "process %d+", "process #" } },
   -- the thread count of the fast passes (every processor by default)
   threads = { { "on %d+ threads?", "on # threads" } },
+  -- the JobRuntime column of GNU parallel's job log (`cut -f 1,4,7`)
+  joblog = { { "^(%d+)\t%s*[%d%.]+\t", "%1\t#\t" } },
   -- times and memory in results.csv rows: the last two numeric columns before `error`
   csvtimes = { { ",[%d%.]+,%d+,([^,]*)$", ",#,#,%1" } },
 }
