@@ -22,9 +22,11 @@
 --
 -- Every Markdown file runs in a fresh temporary folder of its own holding a copy of
 -- examples/ and of every file of examples/data/ at its top level; commands run with
--- `sh`, standard error merged into standard output (2>&1), the build folder first on
--- PATH, in file order, so a block may use what an earlier one wrote. The folder's path is
--- shown as /tmp/femlod-docs, the build folder's as /usr/local/bin.
+-- `sh`, standard error merged into standard output (2>&1), in file order, so a block may
+-- use what an earlier one wrote. PATH starts with the folder's bin/ (for links a set-up
+-- makes) and the build folder; FEMLOD_BUILD and FEMLOD_SOURCE name the build and source
+-- folders. In what commands print, the folder's path is shown as /tmp/femlod-docs, the
+-- build folder's as /usr/local/bin and the source folder's as /usr/local/src/femlod.
 
 local MASKS = {
   -- wall, CPU and ETA times: "0.158 s", "(0.002 s)", "ETA 2 s"
@@ -44,6 +46,7 @@ local MASKS = {
 local SHOWN_TMP = "/tmp/femlod-docs"
 -- the build folder, as an installed femlod would be (`--emit-jobs` prints the program path)
 local SHOWN_BIN = "/usr/local/bin"
+local SHOWN_SOURCE = "/usr/local/src/femlod"
 
 local function die(msg, status)
   io.stderr:write("outputs.lua: ", msg, "\n")
@@ -133,14 +136,15 @@ local function make_tmp()
   return dir
 end
 
-local ENV = "export PATH=" .. shquote(bin) .. ":\"$PATH\"; export LUA_CPATH_5_4="
-  .. shquote(bin .. "/?.so;;") .. "; unset FEMLOD_MODEL_VIEWER; export LC_ALL=C; "
+local ENV = "export PATH=\"$PWD/bin\":" .. shquote(bin) .. ":\"$PATH\"; export LUA_CPATH_5_4="
+  .. shquote(bin .. "/?.so;;") .. "; export FEMLOD_BUILD=" .. shquote(bin) .. " FEMLOD_SOURCE="
+  .. shquote(root) .. "; unset FEMLOD_MODEL_VIEWER; export LC_ALL=C; "
 
 -- Runs the commands in `cmds` one after another in one shell in `dir`; returns one output
 -- text a command (standard error merged) and their exit statuses.
 local SEP = "\30FEMLODDOCSSEP"
 local function run_cmds(dir, cmds)
-  local script = { ENV, "cd " .. shquote(dir) .. " || exit 125" }
+  local script = { "cd " .. shquote(dir) .. " || exit 125", ENV }
   for _, c in ipairs(cmds) do
     script[#script + 1] = "{ " .. c .. "\n} </dev/null 2>&1; __st=$?; printf '\\n" .. SEP
       .. " %d\\n' \"$__st\"; (exit $__st)"
@@ -157,6 +161,7 @@ local function run_cmds(dir, cmds)
     local text = out:sub(pos, s - 1):gsub("\n$", "")
     text = text:gsub(dir:gsub("%p", "%%%0"), SHOWN_TMP)
     text = text:gsub(bin:gsub("%p", "%%%0"), SHOWN_BIN)
+    text = text:gsub(root:gsub("%p", "%%%0"), SHOWN_SOURCE)
     outs[i], stats[i] = text, tonumber(st)
     pos = e + 1
   end
