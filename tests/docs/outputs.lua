@@ -1,9 +1,9 @@
 -- Regenerates or checks the output blocks of the Markdown docs (docs/testing.md,
 -- "Output blocks in the docs").
 --
---   lua5.4 tests/docs/outputs.lua --check [--heavy] [--bin build] [FILE.md ...]
+--   lua5.4 tests/docs/outputs.lua --check [--light] [--times] [--bin build] [FILE.md ...]
 --   lua5.4 tests/docs/outputs.lua --write [--bin build] [FILE.md ...]
---   femlod run tests/docs/outputs.lua mode=check|write [heavy=true] [bin=build] [files=a.md,b.md]
+--   femlod run tests/docs/outputs.lua mode=check|write [light=true] [bin=build] [files=a.md,b.md]
 --
 -- Markers are one-line HTML comments, invisible on the rendered page:
 --
@@ -18,7 +18,7 @@
 --   mask=A,B     replace what legitimately varies (see MASKS) before comparing; --write
 --                keeps the block when the masked texts agree
 --   unordered    compare the lines as a sorted list (workers finishing in any order)
---   heavy        slow: checked only with --heavy (--write always runs it)
+--   heavy        slow: not checked with --light or FEMLOD_TEST_HEAVY=0 (--write runs it)
 --
 -- Every Markdown file runs in a fresh temporary folder of its own holding a copy of
 -- examples/ and of every file of examples/data/ at its top level; commands run with
@@ -83,10 +83,11 @@ local function check_ok(cmd)
 end
 
 -- arguments: from `lua5.4` (arg) or from `femlod run` (params)
-local mode, heavy, bin, files, root_arg = nil, false, "build", {}, nil
+local mode, bin, files, root_arg, times = nil, "build", {}, nil, false
+local heavy = os.getenv("FEMLOD_TEST_HEAVY") ~= "0"
 if type(params) == "table" and params.mode then
   mode = params.mode
-  heavy = params.heavy == true or params.heavy == "true" or params.heavy == 1
+  if params.light == true then heavy = false end
   bin = params.bin or bin
   for f in tostring(params.files or ""):gmatch("[^,]+") do files[#files + 1] = f end
   root_arg = params.root
@@ -96,7 +97,8 @@ else
     local a = arg[i]
     if a == "--check" then mode = "check"
     elseif a == "--write" then mode = "write"
-    elseif a == "--heavy" then heavy = true
+    elseif a == "--light" then heavy = false
+    elseif a == "--times" then times = true
     elseif a == "--bin" then i = i + 1; bin = arg[i] or die("--bin needs a folder")
     elseif a == "--root" then i = i + 1; root_arg = arg[i] or die("--root needs a folder")
     elseif a:sub(1, 1) == "-" then die("unknown option " .. a)
@@ -105,7 +107,7 @@ else
   end
 end
 if mode ~= "check" and mode ~= "write" then
-  die("usage: lua5.4 tests/docs/outputs.lua --check|--write [--heavy] [--bin BUILD] [--root SRC] [FILE.md ...]")
+  die("usage: lua5.4 tests/docs/outputs.lua --check|--write [--light] [--times] [--bin BUILD] [--root SRC] [FILE.md ...]")
 end
 if mode == "write" then heavy = true end
 
@@ -272,7 +274,12 @@ local function process(file)
                 errors = errors + 1
               end
             end
+            local t0 = times and tonumber((capture("date +%s.%N")))
             local outs, st = run_cmds(dir, cmds)
+            if times then
+              io.stderr:write(string.format("%s:%d: %.2f s\n", file, i,
+                tonumber((capture("date +%s.%N"))) - t0))
+            end
             for k, c in ipairs(cmds) do
               if st[k] == 126 or st[k] == 127 then
                 io.stderr:write(file, ":", i, ": cannot run (exit ", st[k], "): ", c, "\n", outs[k], "\n")
