@@ -399,6 +399,82 @@ do
 end
 -- }======
 
+-- {====== the sweep page: series by the second axis, labels apart, rounded
+-- ticks, an honest page when every point failed
+do
+  local function pt(i, target, ms, tri, avg, mn, dev)
+    return { index = i, status = "ok", params = { target = target, min_stretch = ms },
+      meshes = { { path = ("points/%03d/m.obj"):format(i), triangles = tri, stretch_avg = avg, stretch_min = mn,
+        size_max = 1, valence_max = 7, hausdorff_rel = dev } } }
+  end
+  -- two points almost on top of each other per target: their labels must not collide
+  local man = { digest = "d", recipe = { path = "sweep.lua" },
+    grid = { { name = "target", values = { 1500, 3000 } }, { name = "min_stretch", values = { 0.3, 0.5 } } },
+    points = { pt(0, 1500, 0.3, 1500, 0.7412, 0.3101, 0.0041), pt(1, 1500, 0.5, 1502, 0.7433, 0.3105, 0.0042),
+      pt(2, 3000, 0.3, 3000, 0.7671, 0.3302, 0.0023), pt(3, 3000, 0.5, 3001, 0.7688, 0.5013, 0.0024) } }
+  local sp = path("sweep2.html")
+  report.sweep_page(man, sp)
+  local s = T.readfile(sp)
+  local legend = s:match('<div class="series%-legend" id="series%-legend">(.-)</div>')
+  T.check(legend, "a legend for the second axis")
+  T.eq(count(legend or "", 'class="swatch"'), 2, "one entry per value")
+  T.check(legend and legend:find("min_stretch = 0.3", 1, true) and legend:find("min_stretch = 0.5", 1, true),
+    "named by value")
+  local c1, c2 = legend:match('background:(#%x+).-background:(#%x+)')
+  T.check(c1 and c2 and c1 ~= c2, "two colours")
+  for _, id in ipairs { "sweep-stretch-avg", "sweep-stretch-min", "sweep-deviation" } do
+    local svg = s:match('<svg id="' .. id:gsub("%p", "%%%0") .. '".-</svg>')
+    T.eq(count(svg, '<circle class="dot" fill="' .. c1 .. '"'), 2, id .. ": min_stretch 0.3 in its colour")
+    T.eq(count(svg, '<circle class="dot" fill="' .. c2 .. '"'), 2, id .. ": min_stretch 0.5 in its colour")
+    T.eq(count(svg, '<polyline class="series"'), 2, id .. ": a line per series")
+    nice_axis(chart_ticks(svg, "xtick"), id .. " x")
+    nice_axis(chart_ticks(svg, "ytick"), id .. " y")
+    -- label boxes (6 px a character, 10 px high, as placed) overlap no other label
+    local boxes = {}
+    for x, y, t in svg:gmatch('<text x="([%d.-]+)" y="([%d.-]+)" class="dotlabel">([^<]*)</text>') do
+      x, y = tonumber(x), tonumber(y)
+      boxes[#boxes + 1] = { x, y - 8, x + 6 * #t, y + 2 }
+    end
+    T.check(#boxes >= 2, id .. ": labels placed: " .. #boxes)
+    for i = 1, #boxes do
+      for j = i + 1, #boxes do
+        local a, b = boxes[i], boxes[j]
+        T.check(not (a[1] < b[3] and b[1] < a[3] and a[2] < b[4] and b[2] < a[4]), id .. ": labels " .. i .. " and "
+          .. j .. " apart")
+      end
+    end
+  end
+  T.check(s:find('id="counts">4 points: 4 ok, 0 failed', 1, true), "counts")
+  -- one axis: no legend, one colour
+  report.sweep_page({ grid = { { name = "target", values = { 1, 2 } } }, points = { pt(0, 1, nil, 10, 0.7, 0.3, 0.01),
+    pt(1, 2, nil, 20, 0.8, 0.4, 0.02) } }, sp)
+  s = T.readfile(sp)
+  T.check(not s:find("id=\"series-legend\"", 1, true), "one axis: no legend")
+  -- every point failed: no charts, no invented axis, words that count right
+  local failed = { grid = { { name = "target", values = { 1, 2, 3, 4 } } }, points = {} }
+  for i = 0, 3 do
+    failed.points[i + 1] = { index = i, status = "failed", params = { target = i + 1 }, meshes = {},
+      error = "sweep.lua:3: target: integer expected, got nil" }
+  end
+  report.sweep_page(failed, sp)
+  s = T.readfile(sp)
+  T.check(s:find('id="counts">4 points: 0 ok, 4 failed', 1, true), "all failed: counted")
+  T.check(s:find('<p class="failed" id="no%-results"><b>All 4 points failed%.</b> No point saved a mesh'),
+    "all failed: said plainly")
+  T.check(not s:find("<svg", 1, true), "no charts")
+  T.check(not s:find("-0.06", 1, true) and not s:find("1.06", 1, true), "no invented axis")
+  T.eq(count(s:match('<table id="points">.-</table>'), "<tr>"), 5, "the table still lists the points")
+  T.eq(count(s, "integer expected, got nil"), 4, "with their reasons")
+  failed.points = { failed.points[1] }
+  report.sweep_page(failed, sp)
+  s = T.readfile(sp)
+  T.check(s:find('id="counts">1 point: 0 ok, 1 failed', 1, true), "one point: singular")
+  T.check(s:find("<b>The point failed.</b>", 1, true), "one point failed")
+  T.check(not s:find("1 points", 1, true), "never '1 points'")
+  os.remove(sp)
+end
+-- }======
+
 -- {====== femlod report MESH
 do
   local small = path("fan2k.obj")
