@@ -313,7 +313,7 @@ local tick_text = M.tick_text
 -- opts.counts prints the count over every bar; opts.mark {x, text} draws a
 -- dashed line at x (a threshold). Returns the <svg> element.
 local function bar_chart(o)
-  local W, H, L, R, T, Bm = 420, 250, 56, 12, 40, 46
+  local W, H, L, R, T, Bm = 420, 250, 64, 12, 40, 46
   local pw, ph = W - L - R, H - T - Bm
   local most = 0
   for _, b in ipairs(o.bins) do most = max(most, b[3]) end
@@ -344,7 +344,7 @@ local function bar_chart(o)
     out[#out + 1] = format('<line x1="%d" y1="%s" x2="%d" y2="%s" class="grid"/>', L, c2(y), L + pw, c2(y))
     -- on the log scale 0 and 1 sit close: a label only where it has room
     if last_y - y >= 11 then
-      out[#out + 1] = format('<text x="%d" y="%s" class="tick ytick" text-anchor="end">%s</text>', L - 4, c2(y + 4),
+      out[#out + 1] = format('<text x="%d" y="%s" class="tick ytick" text-anchor="end">%s</text>', L - 6, c2(y + 4),
         o.log and format("%d", v) or tick_text(v, ystep))
       last_y = y
     end
@@ -364,7 +364,7 @@ local function bar_chart(o)
   for _, v in ipairs(xt) do
     if v >= x0 - 1e-9 and v <= x1 + 1e-9 then
       out[#out + 1] = format('<text x="%s" y="%d" class="tick xtick" text-anchor="middle">%s</text>', c2(X(v)),
-        T + ph + 14, tick_text(v, xstep))
+        T + ph + 17, tick_text(v, xstep))
     end
   end
   if o.mark then
@@ -450,7 +450,9 @@ local function scatter(id, title, pts, xlabel, ylabel, names)
   end
   local xt, xs = M.ticks(xmin, xmax, 4)
   local yt, ys = M.ticks(ymin, ymax, 4)
-  local x0, x1, y0, y1 = xt[1], xt[#xt], yt[1], yt[#yt]
+  -- the plot reaches a little past the end ticks, so that no dot sits on an axis
+  local px, py = (xt[#xt] - xt[1]) * 0.04, (yt[#yt] - yt[1]) * 0.05
+  local x0, x1, y0, y1 = xt[1] - px, xt[#xt] + px, yt[1] - py, yt[#yt] + py
   local pw, ph = W - L - R, H - T - Bm
   local function X(x) return L + pw * (x - x0) / (x1 - x0) end
   local function Y(y) return T + ph - ph * (y - y0) / (y1 - y0) end
@@ -458,11 +460,11 @@ local function scatter(id, title, pts, xlabel, ylabel, names)
   out[#out + 1] = format('<line x1="%d" y1="%d" x2="%d" y2="%d" class="axis"/>', L, T, L, T + ph)
   for _, v in ipairs(xt) do
     out[#out + 1] = format('<text x="%s" y="%d" class="tick xtick" text-anchor="middle">%s</text>', c2(X(v)),
-      T + ph + 14, tick_text(v, xs))
+      T + ph + 17, tick_text(v, xs))
   end
   for _, v in ipairs(yt) do
     out[#out + 1] = format('<line x1="%d" y1="%s" x2="%d" y2="%s" class="grid"/>', L, c2(Y(v)), L + pw, c2(Y(v)))
-    out[#out + 1] = format('<text x="%d" y="%s" class="tick ytick" text-anchor="end">%s</text>', L - 4,
+    out[#out + 1] = format('<text x="%d" y="%s" class="tick ytick" text-anchor="end">%s</text>', L - 6,
       c2(Y(v) + 4), tick_text(v, ys))
   end
   if names then
@@ -475,7 +477,7 @@ local function scatter(id, title, pts, xlabel, ylabel, names)
       if #line > 1 then
         local d = {}
         for i, p in ipairs(line) do d[i] = c2(X(p[1])) .. "," .. c2(Y(p[2])) end
-        out[#out + 1] = format('<polyline class="series" points="%s" stroke="%s"/>', concat(d, " "),
+        out[#out + 1] = format('<polyline class="series" points="%s" style="stroke:%s"/>', concat(d, " "),
           SERIES[(s - 1) % #SERIES + 1])
       end
     end
@@ -484,7 +486,7 @@ local function scatter(id, title, pts, xlabel, ylabel, names)
   for _, p in ipairs(shown) do
     local cx, cy = X(p[1]), Y(p[2])
     dots[#dots + 1] = { cx, cy }
-    local fill = names and p[5] and format(' fill="%s"', SERIES[(p[5] - 1) % #SERIES + 1]) or ""
+    local fill = names and p[5] and format(' style="fill:%s"', SERIES[(p[5] - 1) % #SERIES + 1]) or ""
     out[#out + 1] = format('<circle class="dot"%s cx="%s" cy="%s" r="5"><title>%s</title></circle>', fill, c2(cx),
       c2(cy), esc(p[3] or ""))
     if p[4] then

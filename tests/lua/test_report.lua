@@ -270,8 +270,8 @@ do
   end
   local mx = ssvg:match('<line id="stretch%-histogram%-mark" x1="([%d.]+)"')
   T.check(mx, "the threshold is marked")
-  -- the plot spans x 56..408 for stretch 0..1
-  T.check(math.abs(tonumber(mx) - (56 + 352 * 0.3)) < 0.01, "the mark at 0.3: " .. tostring(mx))
+  -- the plot spans x 64..408 for stretch 0..1
+  T.check(math.abs(tonumber(mx) - (64 + 344 * 0.3)) < 0.01, "the mark at 0.3: " .. tostring(mx))
   local below = q.histogram[1] + q.histogram[2] + q.histogram[3]
   T.eq(r.below_min_stretch, below, "triangles below the threshold: the bins below 0.3")
   T.check(ssvg:find("min_stretch 0.3: " .. below .. " triangle", 1, true), "the mark says how many are below")
@@ -424,8 +424,8 @@ do
   T.check(c1 and c2 and c1 ~= c2, "two colours")
   for _, id in ipairs { "sweep-stretch-avg", "sweep-stretch-min", "sweep-deviation" } do
     local svg = s:match('<svg id="' .. id:gsub("%p", "%%%0") .. '".-</svg>')
-    T.eq(count(svg, '<circle class="dot" fill="' .. c1 .. '"'), 2, id .. ": min_stretch 0.3 in its colour")
-    T.eq(count(svg, '<circle class="dot" fill="' .. c2 .. '"'), 2, id .. ": min_stretch 0.5 in its colour")
+    T.eq(count(svg, '<circle class="dot" style="fill:' .. c1 .. '"'), 2, id .. ": min_stretch 0.3 in its colour")
+    T.eq(count(svg, '<circle class="dot" style="fill:' .. c2 .. '"'), 2, id .. ": min_stretch 0.5 in its colour")
     T.eq(count(svg, '<polyline class="series"'), 2, id .. ": a line per series")
     nice_axis(chart_ticks(svg, "xtick"), id .. " x")
     nice_axis(chart_ticks(svg, "ytick"), id .. " y")
