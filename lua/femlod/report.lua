@@ -7,6 +7,7 @@
 --   print(report.stats(h:stats()))                     -- how a simplification went
 --   local r = report.report(mesh, { reference = m0, html = "part.html" })  -- also femlod.report
 --   report.sweep_page(manifest, "sweep.html")          -- what `femlod sweep` writes
+--   local ticks, step = report.ticks(0, 1586)          -- 0 500 1000 1500 2000: the pages' axes
 --
 -- Each function also takes a femlod.Mesh instead of its quality table
 -- (report.stats a femlod.Hierarchy instead of its stats table).
@@ -20,7 +21,7 @@ local byte, sub, gsub = string.byte, string.sub, string.gsub
 local pack, unpack = string.pack, string.unpack
 local floor, ceil, max, min, sqrt, abs, huge = math.floor, math.ceil, math.max, math.min, math.sqrt, math.abs, math.huge
 local log = math.log
-local tonumber, table_insert = tonumber, table.insert
+local tonumber = tonumber
 local function log10(x) return log(x, 10) end
 local mtype = math.type
 -- A host may have removed io, os or package (a sandbox): the text
@@ -321,8 +322,8 @@ local function bar_chart(o)
   if o.log then
     local k = max(1, ceil(log10(max(most, 1)) - 1e-9))
     yt, ystep, ytop = {}, 1, 10 ^ k
+    -- 1, 10, 100, ...: no 0, which would sit a few pixels under the 1
     for e = 0, k do yt[#yt + 1] = floor(10 ^ e + 0.5) end
-    table_insert(yt, 1, 0)
     Yv = function(c) return c > 0 and log10(1 + c) / log10(1 + ytop) or 0 end
   else
     yt, ystep = M.ticks(0, max(most, 1), 4)
