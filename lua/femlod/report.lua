@@ -935,6 +935,7 @@ function M.report(mesh, opts)
     local lo, hi = vlist[1].valence, vlist[#vlist].valence
     vticks, vstep = M.ticks(lo, hi, min(hi - lo + 1, 8))
     if vstep < 1 then vticks, vstep = M.ticks(lo, hi, max(hi - lo, 1)) end
+    if vstep < 1 then vticks, vstep = { lo - 1, lo, lo + 1 }, 1 end -- one valence only
     vx0, vx1 = min(vticks[1], lo) - 0.5, max(vticks[#vticks], hi) + 0.5
     for i, e in ipairs(vlist) do
       vbins[i] = { e.valence - 0.5, e.valence + 0.5, e.count, format("valence %d", e.valence) }

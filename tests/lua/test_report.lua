@@ -291,6 +291,11 @@ do
   local h1 = s:match('height="([%d.]+)"><title>stretch %[0%.0, 0%.1%): 1</title>')
   T.check(h1 and tonumber(h1) >= 2, "a single sliver is a visible bar: " .. tostring(h1))
   T.eq(r.below_min_stretch, 1, "one triangle below 0.2")
+  -- one valence only: whole-number ticks around it
+  local one = femlod.mesh { positions = { { 0, 0, 0 }, { 1, 0, 0 }, { 0.5, 0.8, 0 } }, triangles = { { 1, 2, 3 } } }
+  femlod.report(one, { html = pg, viewer = false })
+  T.eq(table.concat(chart_ticks(T.readfile(pg):match('<svg id="valence%-histogram".-</svg>'), "xtick"), " "),
+    "1 2 3", "a single valence: ticks 1 2 3")
   os.remove(pg)
 end
 -- }======
