@@ -7,6 +7,7 @@
 --   print(report.stats(h:stats()))                     -- how a simplification went
 --   local r = report.report(mesh, { reference = m0, html = "part.html" })  -- also femlod.report
 --   report.sweep_page(manifest, "sweep.html")          -- what `femlod sweep` writes
+--   local ticks, step = report.ticks(0, 1586)          -- 0 500 1000 1500 2000: the pages' axes
 --
 -- Each function also takes a femlod.Mesh instead of its quality table
 -- (report.stats a femlod.Hierarchy instead of its stats table).
@@ -17,7 +18,11 @@ local type, error, pairs, ipairs, tostring, getmetatable = type, error, pairs, i
 local pcall = pcall
 local format, rep, concat, sort = string.format, string.rep, table.concat, table.sort
 local byte, sub, gsub = string.byte, string.sub, string.gsub
-local floor, max, min, sqrt, abs, huge = math.floor, math.max, math.min, math.sqrt, math.abs, math.huge
+local pack, unpack = string.pack, string.unpack
+local floor, ceil, max, min, sqrt, abs, huge = math.floor, math.ceil, math.max, math.min, math.sqrt, math.abs, math.huge
+local log = math.log
+local tonumber = tonumber
+local function log10(x) return log(x, 10) end
 local mtype = math.type
 -- A host may have removed io, os or package (a sandbox): the text
 -- functions work without them, the pages say what is missing.
@@ -246,53 +251,185 @@ M.base64 = base64
 -- glTF colours (formats.md), for legends.
 local VIRIDIS = { "#440154", "#3b528b", "#21918c", "#5ec962", "#fde725" }
 
--- A bar chart: bars {label, count}, labelled under each bar, or, with
--- edges (n + 1 strings), at the bin edges; returns the <svg> element.
-local function bar_chart(id, title, bars, xlabel, edges)
-  local W, H, L, R, T, Bm = 420, 240, 56, 12, 28, 46
-  local most = 0
-  for _, b in ipairs(bars) do most = max(most, b[2]) end
-  local out = { format('<svg id="%s" class="chart" xmlns="http://www.w3.org/2000/svg" viewBox="0 0 %d %d" '
-    .. 'width="%d" height="%d" role="img" aria-label="%s">', id, W, H, W, H, esc(title)) }
-  out[#out + 1] = format('<text x="%d" y="18" class="title">%s</text>', W // 2, esc(title))
+-- {=== axes: ticks at "nice numbers" (1, 2, 2.5 or 5 times a power of ten),
+-- covering the data, so that every axis reaches past its largest value.
+
+-- A step near span / n, rounded up to a nice number.
+local function nice_step(span, n)
+  if not (span > 0) then return 1 end
+  local raw = span / n
+  local p = 10 ^ floor(log10(raw))
+  for _, m in ipairs { 1, 2, 2.5, 5, 10 } do
+    if m * p >= raw * (1 - 1e-9) then return m * p end
+  end
+  return 10 * p
+end
+
+-- Decimals a tick label needs at this step.
+local function step_decimals(step)
+  local d = 0
+  while d < 12 and abs(step * 10 ^ d - floor(step * 10 ^ d + 0.5)) > 1e-6 * step * 10 ^ d do d = d + 1 end
+  return d
+end
+
+-- ticks(lo, hi [, n]): about n (default 5) intervals of a nice step from a
+-- multiple of the step at or below lo to one at or above hi. Returns the
+-- list of values and the step.
+function M.ticks(lo, hi, n)
+  if type(lo) ~= "number" or type(hi) ~= "number" or lo ~= lo or hi ~= hi or lo == huge or hi == huge
+      or lo == -huge or hi == -huge then
+    error("bad argument to 'ticks' (finite numbers expected)", 2)
+  end
+  n = n or 5
+  if hi < lo then lo, hi = hi, lo end
+  if hi == lo then
+    local d = lo ~= 0 and abs(lo) * 0.1 or 1
+    lo, hi = lo - d, hi + d
+  end
+  local step = nice_step(hi - lo, n)
+  local a, b = floor(lo / step + 1e-9), ceil(hi / step - 1e-9)
+  local dec = step_decimals(step)
+  local list = {}
+  for k = a, b do
+    local v = tonumber(format("%." .. dec .. "f", k * step))
+    list[#list + 1] = v == 0 and 0 or v
+  end
+  return list, step
+end
+
+-- A tick's label: as many decimals as the step has, no more.
+function M.tick_text(v, step)
+  local s = format("%." .. step_decimals(step) .. "f", v)
+  if s:match("^%-0%.?0*$") then s = s:sub(2) end
+  return s
+end
+local tick_text = M.tick_text
+
+-- }===
+
+-- A histogram: opts.bins {lo, hi, count, tip} on a continuous x axis
+-- [x0, x1] with ticks xticks (values, step); y linear with nice ticks
+-- covering the largest count, or opts.log: log(1 + count), ticks at powers
+-- of ten, so that a bin of one triangle is still a visible bar.
+-- opts.counts prints the count over every bar; opts.mark {x, text} draws a
+-- dashed line at x (a threshold). Returns the <svg> element.
+local function bar_chart(o)
+  local W, H, L, R, T, Bm = 420, 250, 64, 12, 40, 46
   local pw, ph = W - L - R, H - T - Bm
+  local most = 0
+  for _, b in ipairs(o.bins) do most = max(most, b[3]) end
+  local yt, ystep, ytop, Yv
+  if o.log then
+    local k = max(1, ceil(log10(max(most, 1)) - 1e-9))
+    yt, ystep, ytop = {}, 1, 10 ^ k
+    -- 1, 10, 100, ...: no 0, which would sit a few pixels under the 1
+    for e = 0, k do yt[#yt + 1] = floor(10 ^ e + 0.5) end
+    Yv = function(c) return c > 0 and log10(1 + c) / log10(1 + ytop) or 0 end
+  else
+    yt, ystep = M.ticks(0, max(most, 1), 4)
+    if most < 4 then yt, ystep = M.ticks(0, max(most, 1), max(most, 1)) end
+    ytop = yt[#yt]
+    Yv = function(c) return c / ytop end
+  end
+  local x0, x1 = o.x0, o.x1
+  local function X(x) return L + pw * (x - x0) / (x1 - x0) end
+  local function Y(f) return T + ph - ph * f end
+  local out = { format('<svg id="%s" class="chart" xmlns="http://www.w3.org/2000/svg" viewBox="0 0 %d %d" '
+    .. 'width="%d" height="%d" role="img" aria-label="%s">', o.id, W, H, W, H, esc(o.title)) }
+  out[#out + 1] = format('<text x="%d" y="16" class="title">%s</text>', W // 2, esc(o.title))
   out[#out + 1] = format('<line x1="%d" y1="%d" x2="%d" y2="%d" class="axis"/>', L, T + ph, L + pw, T + ph)
   out[#out + 1] = format('<line x1="%d" y1="%d" x2="%d" y2="%d" class="axis"/>', L, T, L, T + ph)
-  for k = 0, 4 do
-    local v = most * k / 4
-    local y = T + ph - ph * k / 4
-    out[#out + 1] = format('<text x="%d" y="%s" class="tick" text-anchor="end">%s</text>', L - 4, c2(y + 4),
-      most >= 4 and format("%d", floor(v + 0.5)) or num(v))
+  local last_y = huge
+  for _, v in ipairs(yt) do
+    local y = Y(Yv(v))
+    out[#out + 1] = format('<line x1="%d" y1="%s" x2="%d" y2="%s" class="grid"/>', L, c2(y), L + pw, c2(y))
+    -- on the log scale 0 and 1 sit close: a label only where it has room
+    if last_y - y >= 11 then
+      out[#out + 1] = format('<text x="%d" y="%s" class="tick ytick" text-anchor="end">%s</text>', L - 6, c2(y + 4),
+        o.log and format("%d", v) or tick_text(v, ystep))
+      last_y = y
+    end
   end
-  local n = #bars
-  local bw = n > 0 and pw / n or pw
-  local every = n > 12 and floor(n / 10 + 0.5) or 1
-  for i, b in ipairs(bars) do
-    local h = most > 0 and ph * b[2] / most or 0
-    local x = L + (i - 1) * bw
+  for _, b in ipairs(o.bins) do
+    local h = ph * Yv(b[3])
+    if b[3] > 0 and h < 2 then h = 2 end
+    local xa, xb = X(b[1]), X(b[2])
     out[#out + 1] = format('<rect class="bar" x="%s" y="%s" width="%s" height="%s"><title>%s: %d</title></rect>',
-      c2(x + 1), c2(T + ph - h), c2(max(bw - 2, 1)), c2(h), esc(b[1]), b[2])
-    if not edges and (i - 1) % every == 0 then
-      out[#out + 1] = format('<text x="%s" y="%d" class="tick" text-anchor="middle">%s</text>', c2(x + bw / 2),
-        T + ph + 14, esc(b[1]))
+      c2(xa + 1), c2(T + ph - h), c2(max(xb - xa - 2, 1)), c2(h), esc(b[4]), b[3])
+    if o.counts then
+      out[#out + 1] = format('<text x="%s" y="%s" class="count" text-anchor="middle">%d</text>', c2((xa + xb) / 2),
+        c2(T + ph - h - 3), b[3])
     end
   end
-  if edges then
-    local step = n > 5 and 2 or 1
-    for k = 0, n, step do
-      out[#out + 1] = format('<text x="%s" y="%d" class="tick" text-anchor="middle">%s</text>', c2(L + k * bw),
-        T + ph + 14, esc(edges[k + 1]))
+  local xt, xstep = o.xticks[1], o.xticks[2]
+  for _, v in ipairs(xt) do
+    if v >= x0 - 1e-9 and v <= x1 + 1e-9 then
+      out[#out + 1] = format('<text x="%s" y="%d" class="tick xtick" text-anchor="middle">%s</text>', c2(X(v)),
+        T + ph + 17, tick_text(v, xstep))
     end
+  end
+  if o.mark then
+    local x = X(o.mark[1])
+    out[#out + 1] = format('<line id="%s-mark" x1="%s" y1="%d" x2="%s" y2="%d" class="mark"/>', o.id, c2(x), T - 6,
+      c2(x), T + ph)
+    out[#out + 1] = format('<text x="%s" y="%d" class="marklabel" text-anchor="%s">%s</text>', c2(x + 3), T - 8,
+      "start", esc(o.mark[2]))
   end
   out[#out + 1] = format('<text x="%d" y="%d" class="label" text-anchor="middle">%s</text>', L + pw // 2, H - 8,
-    esc(xlabel))
+    esc(o.xlabel))
+  if o.ylabel then
+    out[#out + 1] = format('<text x="12" y="%d" class="label" text-anchor="middle" transform="rotate(-90 12 %d)">%s'
+      .. '</text>', T + ph // 2, T + ph // 2, esc(o.ylabel))
+  end
   out[#out + 1] = "</svg>"
   return concat(out, "\n")
 end
 
--- A scatter plot: points {x, y, label}; returns the <svg> element.
-local function scatter(id, title, pts, xlabel, ylabel)
-  local W, H, L, R, T, Bm = 420, 260, 70, 16, 28, 46
+-- Categorical colours for the series of a sweep (Okabe and Ito's palette,
+-- distinguishable with the common colour-vision deficiencies).
+local SERIES = { "#0072b2", "#e69f00", "#009e73", "#cc79a7", "#56b4e9", "#d55e00", "#f0e442", "#000000" }
+
+-- Point labels placed where they overlap no other label and no dot: the
+-- first free place of eight around the dot, or none (the dot's tooltip
+-- still names it). Boxes are estimated from the font (10 px, about 6 px a
+-- character).
+local function place_labels(items, dots)
+  local placed = {}
+  local function hit(a, b)
+    return a[1] < b[3] and b[1] < a[3] and a[2] < b[4] and b[2] < a[4]
+  end
+  local out = {}
+  for _, it in ipairs(items) do
+    local w, h = 6 * #it.text, 10
+    local cands = { { 7, -4 }, { -7 - w, -4 }, { -w / 2, -8 }, { -w / 2, 14 }, { 7, 8 }, { -7 - w, 8 },
+      { 7, -14 }, { -7 - w, -14 } }
+    for _, c in ipairs(cands) do
+      local x, y = it.x + c[1], it.y + c[2]
+      local box = { x, y - h + 2, x + w, y + 2 }
+      local free = box[1] >= it.left and box[3] <= it.right and box[2] >= it.top and box[4] <= it.bottom
+      for _, p in ipairs(placed) do
+        if not free then break end
+        if hit(box, p) then free = false end
+      end
+      for _, d in ipairs(dots) do
+        if not free then break end
+        if hit(box, { d[1] - 5, d[2] - 5, d[1] + 5, d[2] + 5 }) then free = false end
+      end
+      if free then
+        placed[#placed + 1] = box
+        out[#out + 1] = { x = x, y = y, text = it.text }
+        break
+      end
+    end
+  end
+  return out
+end
+
+-- A scatter plot: points {x, y, tip, label, series}; series (1..#names,
+-- coloured, joined by a line in x order, named in a legend) when names
+-- is given. Returns the <svg> element.
+local function scatter(id, title, pts, xlabel, ylabel, names)
+  local W, H, L, R, T, Bm = 420, 270, 70, 16, 28, 46
   local xmin, xmax, ymin, ymax = huge, -huge, huge, -huge
   local shown = {}
   for _, p in ipairs(pts) do
@@ -302,36 +439,63 @@ local function scatter(id, title, pts, xlabel, ylabel)
       ymin, ymax = min(ymin, p[2]), max(ymax, p[2])
     end
   end
-  if #shown == 0 then xmin, xmax, ymin, ymax = 0, 1, 0, 1 end
-  if xmax == xmin then xmin, xmax = xmin - 1, xmax + 1 end
-  if ymax == ymin then
-    local d = ymin ~= 0 and abs(ymin) * 0.1 or 1
-    ymin, ymax = ymin - d, ymax + d
-  end
-  local dx, dy = (xmax - xmin) * 0.06, (ymax - ymin) * 0.08
-  xmin, xmax, ymin, ymax = xmin - dx, xmax + dx, ymin - dy, ymax + dy
-  local pw, ph = W - L - R, H - T - Bm
-  local function X(x) return L + pw * (x - xmin) / (xmax - xmin) end
-  local function Y(y) return T + ph - ph * (y - ymin) / (ymax - ymin) end
   local out = { format('<svg id="%s" class="chart" xmlns="http://www.w3.org/2000/svg" viewBox="0 0 %d %d" '
     .. 'width="%d" height="%d" role="img" aria-label="%s">', id, W, H, W, H, esc(title)) }
   out[#out + 1] = format('<text x="%d" y="18" class="title">%s</text>', W // 2, esc(title))
+  if #shown == 0 then
+    -- Nothing to plot: say so, with no invented axis.
+    out[#out + 1] = format('<text x="%d" y="%d" class="empty" text-anchor="middle">no point has a value to plot</text>',
+      W // 2, H // 2)
+    out[#out + 1] = "</svg>"
+    return concat(out, "\n")
+  end
+  local xt, xs = M.ticks(xmin, xmax, 4)
+  local yt, ys = M.ticks(ymin, ymax, 4)
+  -- the plot reaches a little past the end ticks, so that no dot sits on an axis
+  local px, py = (xt[#xt] - xt[1]) * 0.04, (yt[#yt] - yt[1]) * 0.05
+  local x0, x1, y0, y1 = xt[1] - px, xt[#xt] + px, yt[1] - py, yt[#yt] + py
+  local pw, ph = W - L - R, H - T - Bm
+  local function X(x) return L + pw * (x - x0) / (x1 - x0) end
+  local function Y(y) return T + ph - ph * (y - y0) / (y1 - y0) end
   out[#out + 1] = format('<line x1="%d" y1="%d" x2="%d" y2="%d" class="axis"/>', L, T + ph, L + pw, T + ph)
   out[#out + 1] = format('<line x1="%d" y1="%d" x2="%d" y2="%d" class="axis"/>', L, T, L, T + ph)
-  for k = 0, 4 do
-    local xv, yv = xmin + (xmax - xmin) * k / 4, ymin + (ymax - ymin) * k / 4
-    out[#out + 1] = format('<text x="%s" y="%d" class="tick" text-anchor="middle">%s</text>', c2(X(xv)),
-      T + ph + 14, format("%.4g", xv))
-    out[#out + 1] = format('<text x="%d" y="%s" class="tick" text-anchor="end">%s</text>', L - 4, c2(Y(yv) + 4),
-      format("%.4g", yv))
+  for _, v in ipairs(xt) do
+    out[#out + 1] = format('<text x="%s" y="%d" class="tick xtick" text-anchor="middle">%s</text>', c2(X(v)),
+      T + ph + 17, tick_text(v, xs))
   end
-  for _, p in ipairs(shown) do
-    out[#out + 1] = format('<circle class="dot" cx="%s" cy="%s" r="5"><title>%s</title></circle>', c2(X(p[1])),
-      c2(Y(p[2])), esc(p[3] or ""))
-    if p[4] then
-      out[#out + 1] = format('<text x="%s" y="%s" class="dotlabel">%s</text>', c2(X(p[1]) + 7), c2(Y(p[2]) - 6),
-        esc(p[4]))
+  for _, v in ipairs(yt) do
+    out[#out + 1] = format('<line x1="%d" y1="%s" x2="%d" y2="%s" class="grid"/>', L, c2(Y(v)), L + pw, c2(Y(v)))
+    out[#out + 1] = format('<text x="%d" y="%s" class="tick ytick" text-anchor="end">%s</text>', L - 6,
+      c2(Y(v) + 4), tick_text(v, ys))
+  end
+  if names then
+    for s = 1, #names do
+      local line = {}
+      for _, p in ipairs(shown) do
+        if p[5] == s then line[#line + 1] = p end
+      end
+      sort(line, function(a, b) return a[1] < b[1] end)
+      if #line > 1 then
+        local d = {}
+        for i, p in ipairs(line) do d[i] = c2(X(p[1])) .. "," .. c2(Y(p[2])) end
+        out[#out + 1] = format('<polyline class="series" points="%s" style="stroke:%s"/>', concat(d, " "),
+          SERIES[(s - 1) % #SERIES + 1])
+      end
     end
+  end
+  local dots, items = {}, {}
+  for _, p in ipairs(shown) do
+    local cx, cy = X(p[1]), Y(p[2])
+    dots[#dots + 1] = { cx, cy }
+    local fill = names and p[5] and format(' style="fill:%s"', SERIES[(p[5] - 1) % #SERIES + 1]) or ""
+    out[#out + 1] = format('<circle class="dot"%s cx="%s" cy="%s" r="5"><title>%s</title></circle>', fill, c2(cx),
+      c2(cy), esc(p[3] or ""))
+    if p[4] then
+      items[#items + 1] = { x = cx, y = cy, text = p[4], left = L + 1, right = L + pw, top = T, bottom = T + ph - 1 }
+    end
+  end
+  for _, l in ipairs(place_labels(items, dots)) do
+    out[#out + 1] = format('<text x="%s" y="%s" class="dotlabel">%s</text>', c2(l.x), c2(l.y), esc(l.text))
   end
   out[#out + 1] = format('<text x="%d" y="%d" class="label" text-anchor="middle">%s</text>', L + pw // 2, H - 8,
     esc(xlabel))
@@ -358,9 +522,24 @@ td.name, th.name { text-align: left; }
 .chart .bar { fill: #3b528b; }
 .chart .dot { fill: #21918c; stroke: #222; stroke-width: 0.5; }
 .chart .dotlabel { font-size: 10px; fill: #333; }
+.chart .grid { stroke: #eee; stroke-width: 1; }
+.chart .count { font-size: 9px; fill: #222; }
+.chart .mark { stroke: #d55e00; stroke-width: 1.5; stroke-dasharray: 4 3; }
+.chart .marklabel { font-size: 10px; fill: #d55e00; }
+.chart .series { fill: none; stroke-width: 1.5; opacity: 0.6; }
+.chart .empty { font-size: 12px; fill: #666; }
+.top { display: flex; flex-wrap: wrap; gap: 16px; align-items: flex-start; }
+.view { flex: 0 0 642px; width: 642px; }
+.side { flex: 1 1 360px; min-width: 0; }
+.side h2 { margin-top: 0; }
+.side table { font-size: 13px; }
 #viewer { width: 640px; height: 480px; background: #f0f0f0; border: 1px solid #ddd; }
 .legend { display: flex; align-items: center; gap: 8px; font-size: 12px; }
+.series-legend { display: flex; flex-wrap: wrap; gap: 14px; font-size: 13px; margin: 4px 0 8px; }
+.series-legend span.swatch { display: inline-block; width: 12px; height: 12px; border-radius: 6px;
+  border: 1px solid #222; margin-right: 5px; vertical-align: -1px; }
 .note { color: #666; font-size: 12px; }
+.failed { color: #b00; }
 ]]
 
 local function page_head(title)
@@ -428,11 +607,13 @@ local function find_viewer(opt)
     .. "); set FEMLOD_MODEL_VIEWER or the viewer option to its path, or viewer = false", 3)
 end
 
--- Per-triangle size (longest edge) and per-vertex valence (distinct
--- neighbours through edges), as the quality report defines them.
+-- Per-triangle size (longest edge) and stretch (sqrt(12) * inradius /
+-- longest edge), and per-vertex valence (distinct neighbours through
+-- edges), as the quality report defines them.
+local SQRT12 = sqrt(12)
 local function element_measures(mesh)
   local P, Tr = mesh:positions(), mesh:triangles()
-  local sizes, nb = {}, {}
+  local sizes, stretch, nb = {}, {}, {}
   local function d(a, b)
     local x, y, z = a[1] - b[1], a[2] - b[2], a[3] - b[3]
     return sqrt(x * x + y * y + z * z)
@@ -441,7 +622,15 @@ local function element_measures(mesh)
   local nv = #P
   for i, t in ipairs(Tr) do
     local a, b, c = P[t[1]], P[t[2]], P[t[3]]
-    sizes[i] = max(d(a, b), d(b, c), d(c, a))
+    local ab, bc, ca = d(a, b), d(b, c), d(c, a)
+    local longest = max(ab, bc, ca)
+    sizes[i] = longest
+    local ux, uy, uz = b[1] - a[1], b[2] - a[2], b[3] - a[3]
+    local vx, vy, vz = c[1] - a[1], c[2] - a[2], c[3] - a[3]
+    local cx, cy, cz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    local area2 = sqrt(cx * cx + cy * cy + cz * cz)
+    local perim = ab + bc + ca
+    stretch[i] = (longest > 0 and perim > 0) and SQRT12 * (area2 / perim) / longest or 0
     for k = 1, 3 do
       local u, v = t[k], t[k % 3 + 1]
       if u > v then u, v = v, u end
@@ -453,43 +642,144 @@ local function element_measures(mesh)
       end
     end
   end
-  return sizes, nb
+  return sizes, nb, stretch
 end
 
-local function size_bars(sizes, smax)
-  local bins, counts = 10, {}
-  for k = 1, bins do counts[k] = 0 end
-  for _, s in ipairs(sizes) do
-    local k = smax > 0 and floor(s / smax * bins) + 1 or 1
-    if k > bins then k = bins end
+-- Size bins of a nice width from 0 to a nice edge at or above the
+-- largest size (at most 10 bins): every edge a round number.
+local function size_bins(sizes, smax)
+  local step = smax > 0 and nice_step(smax, 10) or 1
+  local nbins = smax > 0 and max(1, ceil(smax / step - 1e-9)) or 10
+  if nbins * step < smax then nbins = nbins + 1 end
+  local counts, edges = {}, {}
+  for k = 1, nbins do counts[k] = 0 end
+  for _, sz in ipairs(sizes) do
+    local k = floor(sz / step) + 1
+    if k > nbins then k = nbins end
     counts[k] = counts[k] + 1
   end
-  local bars, edges = {}, {}
-  for k = 1, bins do
-    bars[k] = { format("[%.3g, %.3g%s", smax * (k - 1) / bins, smax * k / bins, k == bins and "]" or ")"),
-      counts[k] }
-  end
-  for k = 0, bins do edges[k + 1] = format("%.3g", smax * k / bins) end
-  return bars, counts, edges
+  for k = 0, nbins do edges[k + 1] = tonumber(format("%." .. step_decimals(step) .. "f", k * step)) end
+  return counts, edges, step
 end
 
-local function valence_bars(nb)
+local function valence_list(nb)
   local counts, lo, hi = {}, huge, -huge
   for _, v in pairs(nb) do
     counts[v] = (counts[v] or 0) + 1
     lo, hi = min(lo, v), max(hi, v)
   end
-  local bars, list = {}, {}
-  if lo > hi then return bars, list end
-  for v = lo, hi do
-    bars[#bars + 1] = { format("%d", v), counts[v] or 0 }
-    list[#list + 1] = { valence = v, count = counts[v] or 0 }
+  local list = {}
+  if lo > hi then return list end
+  for v = lo, hi do list[#list + 1] = { valence = v, count = counts[v] or 0 } end
+  return list
+end
+
+-- The simplifier's default least stretch (femlod.h, tau_ST): the mark on
+-- the stretch histogram when the caller names no threshold.
+local DEFAULT_MIN_STRETCH = 0.2
+-- Meshes above this many triangles are shown in the 3D view through a copy
+-- simplified for display: the GLB is inlined in the page (about 110 bytes
+-- a triangle in base64), and a page of tens of megabytes loads slowly.
+local DEFAULT_DISPLAY_TRIANGLES = 20000
+
+-- {=== a compact GLB for the display copy: welded vertices, one colour a
+-- vertex (the least stretch of the triangles around it, on viridis, 8 bits
+-- a channel), 16-bit indices when they fit: about 16 bytes a vertex and 6
+-- a triangle, where femlod's own per-triangle colours take 84 a triangle.
+
+-- Matplotlib's viridis (CC0), sRGB, at t = 0, 16/255, ..., 240/255, 1 (the
+-- table io_gltf.cpp colours with).
+local VIRIDIS17 = {
+  { 0.267004, 0.004874, 0.329415 }, { 0.282327, 0.094955, 0.417331 }, { 0.278826, 0.175490, 0.483397 },
+  { 0.258965, 0.251537, 0.524736 }, { 0.229739, 0.322361, 0.545706 }, { 0.199430, 0.387607, 0.554642 },
+  { 0.172719, 0.448791, 0.557885 }, { 0.149039, 0.508051, 0.557250 }, { 0.127568, 0.566949, 0.550556 },
+  { 0.120638, 0.625828, 0.533488 }, { 0.157851, 0.683765, 0.501686 }, { 0.246070, 0.738910, 0.452024 },
+  { 0.369214, 0.788888, 0.382914 }, { 0.515992, 0.831158, 0.294279 }, { 0.678489, 0.863742, 0.189503 },
+  { 0.845561, 0.887322, 0.099702 }, { 0.993248, 0.906157, 0.143936 },
+}
+
+-- Linear RGB bytes of viridis at t (glTF's COLOR_0 is linear).
+local function viridis_bytes(t)
+  if not (t > 0) then t = 0 elseif t > 1 then t = 1 end
+  local u = t * 255
+  local k = min(floor(u / 16), 15)
+  local t0, t1 = k * 16, k == 15 and 255 or (k + 1) * 16
+  local f = (u - t0) / (t1 - t0)
+  local a, b = VIRIDIS17[k + 1], VIRIDIS17[k + 2]
+  local out = {}
+  for i = 1, 3 do
+    local c = a[i] + f * (b[i] - a[i])
+    local l = c <= 0.04045 and c / 12.92 or ((c + 0.055) / 1.055) ^ 2.4
+    out[i] = floor(min(max(l, 0), 1) * 255 + 0.5)
   end
-  return bars, list
+  return out[1], out[2], out[3]
+end
+
+local function glb_compact(mesh, stretch)
+  local P, Tr = mesh:positions(), mesh:triangles()
+  local nv, nt = #P, #Tr
+  local vmin = {}
+  for i, t in ipairs(Tr) do
+    local s = stretch[i]
+    for k = 1, 3 do
+      local v = t[k]
+      if not vmin[v] or s < vmin[v] then vmin[v] = s end
+    end
+  end
+  local pos, col, lo, hi = {}, {}, { huge, huge, huge }, { -huge, -huge, -huge }
+  for v = 1, nv do
+    local p = P[v]
+    pos[v] = pack("<fff", p[1], p[2], p[3])
+    for k = 1, 3 do
+      local x = unpack("<f", pack("<f", p[k]))
+      lo[k], hi[k] = min(lo[k], x), max(hi[k], x)
+    end
+    local r, g, b = viridis_bytes(vmin[v] or 1)
+    col[v] = pack("BBBB", r, g, b, 255)
+  end
+  local wide = nv > 65535
+  local ifmt = wide and "<I4I4I4" or "<I2I2I2"
+  local idx = {}
+  for i, t in ipairs(Tr) do idx[i] = pack(ifmt, t[1] - 1, t[2] - 1, t[3] - 1) end
+  local bpos, bcol, bidx = concat(pos), concat(col), concat(idx)
+  local pad = rep("\0", (4 - #bidx % 4) % 4)
+  local bin = bpos .. bcol .. bidx .. pad
+  if nv == 0 then lo, hi = { 0, 0, 0 }, { 0, 0, 0 } end
+  local function v3(a) return format("[%.9g,%.9g,%.9g]", a[1], a[2], a[3]) end
+  local json = format('{"asset":{"version":"2.0","generator":"femlod report (display copy)",'
+    .. '"extras":{"color_by":"stretch","color_scale":{"map":"viridis","min":0.0,"max":1.0,"per":"vertex",'
+    .. '"of":"least stretch of the triangles around the vertex"}}},'
+    .. '"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],'
+    .. '"meshes":[{"name":"femlod","primitives":[{"attributes":{"POSITION":0,"COLOR_0":1},"indices":2,'
+    .. '"material":0,"mode":4}]}],'
+    .. '"extensionsUsed":["KHR_materials_unlit"],"materials":[{"name":"femlod stretch","doubleSided":true,'
+    .. '"extensions":{"KHR_materials_unlit":{}},"pbrMetallicRoughness":{"metallicFactor":0.0}}],'
+    .. '"buffers":[{"byteLength":%d}],"bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":%d,"target":34962},'
+    .. '{"buffer":0,"byteOffset":%d,"byteLength":%d,"target":34962},'
+    .. '{"buffer":0,"byteOffset":%d,"byteLength":%d,"target":34963}],'
+    .. '"accessors":[{"bufferView":0,"componentType":5126,"count":%d,"type":"VEC3","min":%s,"max":%s},'
+    .. '{"bufferView":1,"componentType":5121,"normalized":true,"count":%d,"type":"VEC4"},'
+    .. '{"bufferView":2,"componentType":%d,"count":%d,"type":"SCALAR"}]}',
+    #bin, #bpos, #bpos, #bcol, #bpos + #bcol, #bidx, nv, v3(lo), v3(hi), nv, wide and 5125 or 5123, 3 * nt)
+  json = json .. rep(" ", (4 - #json % 4) % 4)
+  local total = 12 + 8 + #json + 8 + #bin
+  return pack("<c4I4I4", "glTF", 2, total) .. pack("<I4c4", #json, "JSON") .. json
+    .. pack("<I4c4", #bin, "BIN\0") .. bin
+end
+
+-- }===
+
+-- The copy for display, or nil when the simplifier cannot make one.
+local function display_copy(mesh, cap)
+  local ok, h = pcall(mesh.simplify, mesh, { target = cap, tolerance = false, max_size = false, max_valence = false,
+    fast_above = 2 })
+  if not ok then return nil end
+  local hh <close> = h
+  return hh:mesh()
 end
 
 local REPORT_KEYS = { reference = true, html = true, name = true, reference_name = true, viewer = true,
-  title = true, progress = true }
+  title = true, progress = true, min_stretch = true, display_triangles = true }
 
 local function check_opts(opts)
   if opts == nil then return {} end
@@ -498,8 +788,8 @@ local function check_opts(opts)
   end
   for k in pairs(opts) do
     if not REPORT_KEYS[k] then
-      error(format("bad argument #2 to 'report' (unknown option '%s'; valid: html, name, progress, "
-        .. "reference, reference_name, title, viewer)", tostring(k)), 3)
+      error(format("bad argument #2 to 'report' (unknown option '%s'; valid: display_triangles, html, "
+        .. "min_stretch, name, progress, reference, reference_name, title, viewer)", tostring(k)), 3)
     end
   end
   for _, k in ipairs { "html", "name", "reference_name", "title" } do
@@ -509,6 +799,16 @@ local function check_opts(opts)
   end
   if opts.viewer ~= nil and opts.viewer ~= false and type(opts.viewer) ~= "string" then
     error(format("bad argument #2 to 'report' (viewer: path or false expected, got %s)", type(opts.viewer)), 3)
+  end
+  local ms = opts.min_stretch
+  if ms ~= nil and ms ~= false and not (type(ms) == "number" and ms >= 0 and ms <= 1) then
+    error(format("bad argument #2 to 'report' (min_stretch: number in [0, 1] or false expected, got %s)",
+      type(ms) == "number" and num(ms) or type(ms)), 3)
+  end
+  local dt = opts.display_triangles
+  if dt ~= nil and dt ~= false and not (mtype(dt) == "integer" and dt >= 100) then
+    error(format("bad argument #2 to 'report' (display_triangles: integer >= 100 or false expected, got %s)",
+      type(dt) == "number" and num(dt) or type(dt)), 3)
   end
   if opts.progress ~= nil and type(opts.progress) ~= "function" then
     error(format("bad argument #2 to 'report' (progress: function expected, got %s)", type(opts.progress)), 3)
@@ -576,15 +876,18 @@ function M.report(mesh, opts)
   local ref = loaded_ref or opts.reference
   local ref_name = opts.reference_name or (path_ref and path_ref:match("[^/]*$")) or "reference"
   local q = ref and opts.progress and mesh:quality(ref, { progress = opts.progress }) or mesh:quality(ref)
-  local sizes, nb = element_measures(mesh)
-  local sbars, sedges = {}, {}
+  local sizes, nb, tstretch = element_measures(mesh)
   local nbins = #q.histogram
-  for k, n in ipairs(q.histogram) do
-    sbars[k] = { format("[%.1f, %.1f%s", (k - 1) / nbins, k / nbins, k == nbins and "]" or ")"), n }
+  local zcounts, zedges, zstep = size_bins(sizes, q.size_max)
+  local vlist = valence_list(nb)
+  local threshold = opts.min_stretch
+  if threshold == nil then threshold = DEFAULT_MIN_STRETCH end
+  local below = 0
+  if threshold then
+    for _, st in ipairs(tstretch) do
+      if st < threshold then below = below + 1 end
+    end
   end
-  for k = 0, nbins do sedges[k + 1] = format("%.1f", k / nbins) end
-  local zbars, zcounts, zedges = size_bars(sizes, q.size_max)
-  local vbars, vlist = valence_bars(nb)
   local rows = {}
   local rq
   if ref then
@@ -597,33 +900,93 @@ function M.report(mesh, opts)
     row = M.row(q, name, ref and "result" or nil),
     reference_row = rq and M.row(rq, ref_name, "reference") or nil,
     text = M.text(q, name),
-    histograms = { stretch = q.histogram, size = zcounts, size_max = q.size_max, valence = vlist },
+    histograms = { stretch = q.histogram, size = zcounts, size_edges = zedges, size_max = q.size_max,
+      valence = vlist },
+    min_stretch = threshold or nil, below_min_stretch = threshold and below or nil,
     hausdorff = q.hausdorff, hausdorff_rel = q.hausdorff_rel,
     viewer = false,
   }
   if not opts.html then return summary end
+
+  -- the charts
+  local sbins = {}
+  for k, n in ipairs(q.histogram) do
+    sbins[k] = { (k - 1) / nbins, k / nbins, n,
+      format("stretch [%.1f, %.1f%s", (k - 1) / nbins, k / nbins, k == nbins and "]" or ")") }
+  end
+  local stretch_chart = bar_chart {
+    id = "stretch-histogram", title = "Stretch distribution (triangles, log scale)", bins = sbins,
+    x0 = 0, x1 = 1, xticks = { M.ticks(0, 1, nbins) }, xlabel = "stretch", ylabel = "triangles", log = true,
+    counts = true,
+    mark = threshold and { threshold, format("%s %s: %s below", opts.min_stretch and "min_stretch" or "default min_stretch",
+      num(threshold), plural(below, "triangle")) } or nil,
+  }
+  local zbins = {}
+  for k, n in ipairs(zcounts) do
+    zbins[k] = { zedges[k], zedges[k + 1], n, format("longest edge [%s, %s%s", tick_text(zedges[k], zstep),
+      tick_text(zedges[k + 1], zstep), k == #zcounts and "]" or ")") }
+  end
+  local size_chart = bar_chart {
+    id = "size-histogram", title = "Size distribution (triangles)", bins = zbins, x0 = 0, x1 = zedges[#zedges],
+    xticks = { M.ticks(0, zedges[#zedges], min(#zcounts, 10)) }, xlabel = "longest edge", ylabel = "triangles",
+  }
+  local vbins, vx0, vx1, vticks, vstep = {}, 0, 1, { 0, 1 }, 1
+  if #vlist > 0 then
+    local lo, hi = vlist[1].valence, vlist[#vlist].valence
+    vticks, vstep = M.ticks(lo, hi, min(hi - lo + 1, 8))
+    if vstep < 1 then vticks, vstep = M.ticks(lo, hi, max(hi - lo, 1)) end
+    if vstep < 1 then vticks, vstep = { lo - 1, lo, lo + 1 }, 1 end -- one valence only
+    vx0, vx1 = min(vticks[1], lo) - 0.5, max(vticks[#vticks], hi) + 0.5
+    for i, e in ipairs(vlist) do
+      vbins[i] = { e.valence - 0.5, e.valence + 0.5, e.count, format("valence %d", e.valence) }
+    end
+  end
+  local valence_chart = bar_chart {
+    id = "valence-histogram", title = "Valence distribution (vertices)", bins = vbins, x0 = vx0, x1 = vx1,
+    xticks = { vticks, vstep }, xlabel = "valence", ylabel = "vertices",
+  }
 
   local js
   if opts.viewer ~= false then js = find_viewer(opts.viewer) end
   local title = opts.title or ("femlod report: " .. name)
   local parts = { page_head(title), "<h1>" .. esc(title) .. "</h1>",
     format('<p class="note">%s; written by femlod</p>', esc(M.text(q, name):match("^[^\n]*"))),
-    "<h2>Quality (the paper's Table 1 columns)</h2>", table1(rows) }
+    '<div class="top">' }
+  local side = { '<div class="side">', "<h2>Quality (the paper's Table 1 columns)</h2>", table1(rows) }
   if ref then
-    parts[#parts + 1] = format('<p id="deviation">Hausdorff deviation from the reference: <b>%s</b> '
+    side[#side + 1] = format('<p id="deviation">Hausdorff deviation from the reference: <b>%s</b> '
       .. '(%s of the reference\'s bounding-box diagonal; forward %s, backward %s)</p>', num(q.hausdorff),
       num(q.hausdorff_rel), num(q.hausdorff_forward), num(q.hausdorff_backward))
   end
-  parts[#parts + 1] = "<h2>Distributions</h2>"
-  parts[#parts + 1] = '<div class="charts">'
-  parts[#parts + 1] = bar_chart("stretch-histogram", "Stretch distribution (triangles)", sbars, "stretch", sedges)
-  parts[#parts + 1] = bar_chart("size-histogram", "Size distribution (triangles)", zbars, "longest edge", zedges)
-  parts[#parts + 1] = bar_chart("valence-histogram", "Valence distribution (vertices)", vbars, "valence")
-  parts[#parts + 1] = "</div>"
+  if threshold then
+    side[#side + 1] = format('<p id="below-threshold">%s below %s %s (least stretch %.3f)</p>',
+      plural(below, "triangle"), opts.min_stretch and "min_stretch" or "the simplifier's default min_stretch",
+      num(threshold), q.stretch_min)
+  end
   if js then
-    local ok, glb = pcall(mesh.encode, mesh, name .. ".glb", { color_by = "stretch" })
-    if not ok then error(format("%s: cannot make the GLB: %s", opts.html, tostring(glb)), 2) end
-    parts[#parts + 1] = "<h2>Stretch on the mesh</h2>"
+    local cap = opts.display_triangles
+    if cap == nil then cap = DEFAULT_DISPLAY_TRIANGLES end
+    local big = cap and q.triangles > cap
+    local display <close> = big and display_copy(mesh, cap) or nil
+    local glb, note
+    if big then
+      -- Above cap triangles: a copy simplified for display (as far as the
+      -- simplifier gets towards cap), in the compact GLB.
+      local shown = display or mesh
+      local _, _, st = element_measures(shown)
+      glb = glb_compact(shown, st)
+      local nshown = shown:counts().triangles
+      note = format("The 3D view shows %s, so that the page stays small; each vertex is coloured by the least "
+        .. "stretch of the triangles around it. The table and the charts are the full mesh's.",
+        display and format("a copy simplified for display with femlod.simplify: %d of the mesh's %d triangles",
+          nshown, q.triangles) or format("the mesh's %d triangles", q.triangles))
+      summary.display_triangles = nshown
+    else
+      local ok, g = pcall(mesh.encode, mesh, name .. ".glb", { color_by = "stretch" })
+      if not ok then error(format("%s: cannot make the GLB: %s", opts.html, tostring(g)), 2) end
+      glb = g
+    end
+    parts[#parts + 1] = '<div class="view">'
     parts[#parts + 1] = '<model-viewer id="viewer" alt="' .. esc(name) .. ' coloured by stretch" '
       .. 'camera-controls interaction-prompt="none" shadow-intensity="0" exposure="1" '
       .. 'src="data:model/gltf-binary;base64,' .. base64(glb) .. '"></model-viewer>'
@@ -634,12 +997,27 @@ function M.report(mesh, opts)
     parts[#parts + 1] = '<div class="legend"><span>stretch 0</span><svg id="legend" width="200" height="14" '
       .. 'xmlns="http://www.w3.org/2000/svg"><defs><linearGradient id="viridis">' .. concat(stops)
       .. '</linearGradient></defs><rect width="200" height="14" fill="url(#viridis)"/></svg><span>1</span>'
-      .. '<span class="note">(per triangle; drag to turn, scroll to zoom)</span></div>'
-    -- An inline module: "</script" cannot occur in it, so escape it where it would.
-    parts[#parts + 1] = '<script type="module">\n' .. gsub(js, "</(script)", "<\\/%1") .. "\n</script>"
+      .. format('<span class="note">(per %s; drag to turn, scroll to zoom)</span></div>', note and "vertex" or "triangle")
+    if note then
+      parts[#parts + 1] = '<p class="note" id="display-note">' .. esc(note) .. "</p>"
+    end
+    parts[#parts + 1] = "</div>"
     summary.viewer = true
   else
-    parts[#parts + 1] = '<p class="note">3D view left out (viewer = false).</p>'
+    side[#side + 1] = '<p class="note">3D view left out (viewer = false).</p>'
+  end
+  side[#side + 1] = "</div>"
+  parts[#parts + 1] = concat(side, "\n")
+  parts[#parts + 1] = "</div>"
+  parts[#parts + 1] = "<h2>Distributions</h2>"
+  parts[#parts + 1] = '<div class="charts">'
+  parts[#parts + 1] = stretch_chart
+  parts[#parts + 1] = size_chart
+  parts[#parts + 1] = valence_chart
+  parts[#parts + 1] = "</div>"
+  if js then
+    -- An inline module: "</script" cannot occur in it, so escape it where it would.
+    parts[#parts + 1] = '<script type="module">\n' .. gsub(js, "</(script)", "<\\/%1") .. "\n</script>"
   end
   parts[#parts + 1] = "</body>\n</html>\n"
   write_atomic(opts.html, concat(parts, "\n"), 3)
@@ -672,10 +1050,23 @@ function M.sweep_page(man, path)
   for _, n in ipairs(names) do rows[1] = rows[1] .. "<th>" .. esc(n) .. "</th>" end
   rows[1] = rows[1] .. "<th class=\"name\">mesh</th><th>elements</th><th>stretch avg</th><th>stretch min</th>"
     .. "<th>size max</th><th>valence max</th><th>deviation (rel.)</th><th class=\"name\">error</th></tr>"
+  -- Series: the values of the second grid axis, in the grid's order.
+  local series_name = names[2]
+  local series_values, series_of = nil, {}
+  if series_name then
+    series_values = {}
+    for i, v in ipairs(man.grid[2].values or {}) do
+      series_values[i] = v
+      series_of[tostring(v)] = i
+    end
+  end
   local s_avg, s_min, dev = {}, {}, {}
+  local nok, nmesh = 0, 0
   for _, p in ipairs(man.points) do
     local m = last_mesh(p)
-    local cells = { format("<td>%03d</td>", p.index or 0), "<td class=\"name\">" .. esc(p.status or "?") .. "</td>" }
+    if p.status == "ok" then nok = nok + 1 end
+    local cells = { format("<td>%03d</td>", p.index or 0), format('<td class="name%s">%s</td>',
+      p.status == "ok" and "" or " failed", esc(p.status or "?")) }
     for _, n in ipairs(names) do cells[#cells + 1] = "<td>" .. esc(tostring((p.params or {})[n])) .. "</td>" end
     local function cell(v, fmt)
       return "<td>" .. (type(v) == "number" and format(fmt, v) or "") .. "</td>"
@@ -690,22 +1081,51 @@ function M.sweep_page(man, path)
     cells[#cells + 1] = "<td class=\"name\">" .. esc(type(p.error) == "string" and p.error or "") .. "</td>"
     rows[#rows + 1] = "<tr>" .. concat(cells) .. "</tr>"
     if m and type(m.triangles) == "number" then
+      nmesh = nmesh + 1
       local l, short = label(p), format("%03d", p.index or 0)
-      s_avg[#s_avg + 1] = { m.triangles, m.stretch_avg, l, short }
-      s_min[#s_min + 1] = { m.triangles, m.stretch_min, l, short }
-      if type(m.hausdorff_rel) == "number" then dev[#dev + 1] = { m.triangles, m.hausdorff_rel, l, short } end
+      local sv = series_name and series_of[tostring((p.params or {})[series_name])] or nil
+      s_avg[#s_avg + 1] = { m.triangles, m.stretch_avg, l, short, sv }
+      s_min[#s_min + 1] = { m.triangles, m.stretch_min, l, short, sv }
+      if type(m.hausdorff_rel) == "number" then dev[#dev + 1] = { m.triangles, m.hausdorff_rel, l, short, sv } end
     end
   end
   rows[#rows + 1] = "</table>"
+  local npoints = #man.points
   local title = "femlod sweep: " .. tostring(man.recipe and man.recipe.path or "recipe")
   local parts = { page_head(title), "<h1>" .. esc(title) .. "</h1>",
-    format('<p class="note">%d points; digest %s; %s</p>', #man.points, esc(man.digest or "?"),
-      esc(man.femlod or "femlod")),
-    "<h2>Points</h2>", concat(rows, "\n"), "<h2>Elements against quality</h2>", '<div class="charts">',
-    scatter("sweep-stretch-avg", "Average stretch", s_avg, "elements", "stretch (avg)"),
-    scatter("sweep-stretch-min", "Minimum stretch", s_min, "elements", "stretch (min)"),
-    scatter("sweep-deviation", "Deviation from the input", dev, "elements", "Hausdorff / diagonal"),
-    "</div>", "</body>\n</html>\n" }
+    format('<p class="note" id="counts">%s: %d ok, %d failed; digest %s; %s</p>', plural(npoints, "point"), nok,
+      npoints - nok, esc(man.digest or "?"), esc(man.femlod or "femlod")) }
+  if nmesh == 0 then
+    -- Nothing to compare: say so plainly instead of empty charts.
+    local lead = npoints == 0 and "The sweep has no points."
+      or nok == 0 and (npoints == 1 and "The point failed." or format("All %d points failed.", npoints))
+    parts[#parts + 1] = format('<p class="failed" id="no-results">%sNo point saved a mesh, so there is '
+      .. 'nothing to plot.%s</p>', lead and "<b>" .. esc(lead) .. "</b> " or "",
+      npoints > nok and " Each failed point\'s reason is in the error column below, in results.csv and in the "
+        .. "point\'s stderr.txt." or "")
+    parts[#parts + 1] = "<h2>Points</h2>"
+    parts[#parts + 1] = concat(rows, "\n")
+  else
+    parts[#parts + 1] = "<h2>Elements against quality</h2>"
+    if series_values then
+      local items = {}
+      for i, v in ipairs(series_values) do
+        items[i] = format('<span class="item"><span class="swatch" style="background:%s"></span>%s = %s</span>',
+          SERIES[(i - 1) % #SERIES + 1], esc(series_name), esc(tostring(v)))
+      end
+      parts[#parts + 1] = '<div class="series-legend" id="series-legend">' .. concat(items) .. "</div>"
+    end
+    local snames = series_values and series_values or nil
+    parts[#parts + 1] = '<div class="charts">'
+    parts[#parts + 1] = scatter("sweep-stretch-avg", "Average stretch", s_avg, "elements", "stretch (avg)", snames)
+    parts[#parts + 1] = scatter("sweep-stretch-min", "Minimum stretch", s_min, "elements", "stretch (min)", snames)
+    parts[#parts + 1] = scatter("sweep-deviation", "Deviation from the input", dev, "elements",
+      "Hausdorff / diagonal", snames)
+    parts[#parts + 1] = "</div>"
+    parts[#parts + 1] = "<h2>Points</h2>"
+    parts[#parts + 1] = concat(rows, "\n")
+  end
+  parts[#parts + 1] = "</body>\n</html>\n"
   write_atomic(path, concat(parts, "\n"), 3)
   return path
 end

@@ -765,10 +765,30 @@ static void progress_draw(const progress *b) {
 }
 /* }=== */
 
-/* One line per finished point (unless --quiet). */
+static char *last_stderr_line(const sweep *s, size_t p);
+
+/* Why a point failed, for its console line: the first line of the error its
+ * record gives (the recipe's message), else the last line of its
+ * stderr.txt; NULL when neither says anything. */
+static char *failure_reason(const sweep *s, size_t p) {
+    char path[PATH_MAX + 64];
+    point_path(s, p, "record.json", path, sizeof path);
+    int bad = 0;
+    cJSON *rec = read_json_object(path, &bad);
+    cJSON *e = rec ? cJSON_GetObjectItemCaseSensitive(rec, "error") : NULL;
+    char *why = cJSON_IsString(e) && e->valuestring[0] ? strdup(e->valuestring) : NULL;
+    cJSON_Delete(rec);
+    if (!why) why = last_stderr_line(s, p);
+    if (why) why[strcspn(why, "\r\n")] = '\0';
+    return why;
+}
+
+/* One line per finished point (unless --quiet); a failed one ends with
+ * its reason, so that the console says what results.csv says. */
 static void print_point(const sweep *s, size_t p, int status, double wall, long rss_kb) {
     if (s->cli->quiet) return;
     char what[64];
+    int ok = WIFEXITED(status) && WEXITSTATUS(status) == 0;
     if (WIFEXITED(status))
         snprintf(what, sizeof what, WEXITSTATUS(status) ? "failed (exit %d)" : "ok", WEXITSTATUS(status));
     else
@@ -776,7 +796,11 @@ static void print_point(const sweep *s, size_t p, int status, double wall, long 
     printf("point %0*zu", s->width, p);
     for (size_t a = 0; a < s->naxes; a++)
         printf(" %.*s=%s", (int)s->axes[a].name_len, s->axes[a].name, s->axes[a].values[axis_index(s, p, a)]);
-    printf(": %s, %.2f s, %.1f MB\n", what, wall, (double)rss_kb / 1024.0);
+    printf(": %s, %.2f s, %.1f MB", what, wall, (double)rss_kb / 1024.0);
+    char *why = ok ? NULL : failure_reason(s, p);
+    if (why) printf(": %s", why);
+    free(why);
+    putchar('\n');
     fflush(stdout);
 }
 

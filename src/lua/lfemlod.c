@@ -78,6 +78,14 @@ static int lib_isatty(lua_State *L) {
     return 1;
 }
 
+/* femlod._clock(): wall-clock seconds from an arbitrary origin (monotonic),
+ * for femlod.progress: os.clock is CPU time, which runs ahead of the wall
+ * when the core works on several threads. */
+static int lib_clock(lua_State *L) {
+    lua_pushnumber(L, fl_lua_clock());
+    return 1;
+}
+
 /* {====================================================================
  * Embedded helpers
  * ===================================================================== */
@@ -160,6 +168,8 @@ int luaopen_femlod(lua_State *L) {
     lua_setfield(L, -2, "_VIEWER_PATHS");
     lua_pushcfunction(L, lib_isatty);
     lua_setfield(L, -2, "_isatty");
+    lua_pushcfunction(L, lib_clock);
+    lua_setfield(L, -2, "_clock");
     lua_getfield(L, LUA_REGISTRYINDEX, FL_VERBOSITY_KEY);
     lua_Integer level = lua_tointeger(L, -1);
     lua_pop(L, 1);

@@ -18,16 +18,50 @@ local function sink()
   return s
 end
 
+-- A clock the test moves by hand.
+local function fake_clock(t0)
+  local c = { now = t0 or 100 }
+  c.fn = function() return c.now end
+  return c
+end
+
 do
   local out = sink()
-  local bar = progress.bar { label = "work", stream = out, force = true }
+  local clk = fake_clock()
+  local bar = progress.bar { label = "work", stream = out, force = true, clock = clk.fn }
   T.eq(type(bar.update), "function", "bar.update is the progress function")
-  T.eq(bar.update(0.5), nil, "update returns nothing: never stops the work")
-  T.check(out.text:find("^\r\27%[Kwork %[############............%]  50%%  [%d.]+ s  [%d?]+ %%/s  ETA "),
-    "bar text: " .. T.show(out.text))
+  T.check(out.text:find("^\r\27%[Kwork %[===%.+%]   0%%  0%.0 s  starting$"),
+    "drawn when made, before any call: " .. T.show(out.text))
+  -- set-up: done stays 0, the marker moves and the time counts
+  local frames = {}
+  for i = 1, 3 do
+    clk.now = clk.now + 0.4
+    T.eq(bar.update(0), nil, "update returns nothing: never stops the work")
+    frames[i] = out.text:match("%[([^%]]*)%][^\r]*$")
+  end
+  T.check(frames[1] ~= frames[2] and frames[2] ~= frames[3], "the marker moves during the set-up: "
+    .. table.concat(frames, " | "))
+  T.check(out.text:find("1%.2 s  starting$"), "wall time counts during the set-up: " .. T.show(out.text))
+  -- work: 1% a second after 1.2 s of set-up; no ETA below a few percent
+  local function at(t, done)
+    clk.now = 100 + t
+    bar.update(done)
+    return out.text:match("[^\r]*$")
+  end
+  local line = at(2.2, 0.01)
+  T.check(line:find("  1%%  2%.2 s  %? %%/s  ETA %?$"), "no rate before half a second of progress: " .. line)
+  line = at(2.7, 0.015)
+  T.check(line:find("%[%.+%]   2%%  2%.7 s  1%.00 %%/s  ETA %?$"), "a rate with digits, no ETA at 1.5%: " .. line)
+  line = at(4.2, 0.03)
+  T.check(line:find("3%%  4%.2 s  1%.00 %%/s  ETA 1 min 37 s$"), "ETA from 3% on, from the rate: " .. line)
+  -- a burst (3% in half a second) moves the smoothed rate only part way
+  line = at(4.7, 0.06)
+  T.check(line:find("6%%  4%.7 s  2%.50 %%/s  ETA 38 s$"), "smoothed rate: " .. line)
   local n = #out.text
-  bar.update(0.51)
+  clk.now = clk.now + 0.05
+  bar.update(0.07)
   T.eq(#out.text, n, "redraws at most 10 times a second")
+  clk.now = clk.now + 0.01
   bar.update(1)
   T.check(out.text:find("%[########################%] 100%%", n + 1), "done is always drawn")
   bar:close()
@@ -44,13 +78,48 @@ do
   T.eq(quiet.text, "", "a given stream without force: no bar")
   T.eq(progress.enabled(), false, "ctest's stderr is not a terminal")
   local clamp = sink()
-  local c = progress.bar { stream = clamp, force = true }
+  local c = progress.bar { stream = clamp, force = true, clock = fake_clock().fn }
   c.update(7)
   T.check(clamp.text:find("100%%"), "done above 1 is 1")
-  T.checkerr("unknown option 'lable'; valid: force, label, stream", progress.bar, { lable = "x" })
+  T.checkerr("unknown option 'lable'; valid: clock, force, label, stream", progress.bar, { lable = "x" })
   T.checkerr("label: string expected, got number", progress.bar, { label = 1 })
+  T.checkerr("clock: function expected, got number", progress.bar, { clock = 1 })
   T.checkerr("table expected, got string", progress.bar, "x")
   T.checkerr("0, 1 or 2 expected", femlod._isatty, 7)
+end
+
+-- The numbers: rates with two or three significant digits, durations as
+-- people read them.
+do
+  local rt, tt = progress.rate_text, progress.time_text
+  T.eq(rt(1.234), "1.23", "rate 1.23")
+  T.eq(rt(0.35), "0.35", "rate 0.35")
+  T.eq(rt(12.34), "12.3", "rate 12.3")
+  T.eq(rt(123.4), "123", "rate 123")
+  T.eq(rt(9.999), "10.0", "rate rounds up a range")
+  T.eq(rt(0.0001), "<0.001", "rate below 0.001")
+  T.eq(tt(4.14), "4.1 s", "4.1 s")
+  T.eq(tt(35.4), "35 s", "35 s")
+  T.eq(tt(125), "2 min 05 s", "2 min 05 s")
+  T.eq(tt(3725), "1 h 02 min", "1 h 02 min")
+end
+
+-- Wall time, not CPU time: femlod._clock follows the wall while the
+-- process sleeps (os.clock stands still).
+do
+  T.eq(type(femlod._clock), "function", "femlod._clock")
+  local w0, c0 = femlod._clock(), os.clock()
+  os.execute("sleep 0.3")
+  local dw, dc = femlod._clock() - w0, os.clock() - c0
+  T.check(dw >= 0.25 and dw < 5, "the wall clock moved across a sleep: " .. dw)
+  T.check(dc < 0.2, "CPU time did not: " .. dc)
+  local out = sink()
+  local bar = progress.bar { stream = out, force = true }
+  os.execute("sleep 0.3")
+  bar.update(0)
+  T.check(out.text:find("0%.[3-9] s  starting$") or out.text:find("[1-4]%.%d s  starting$"),
+    "the default clock is the wall clock: " .. T.show(out.text))
+  bar:close()
 end
 
 -- With simplify, as the CLI uses it: the result is the same as without.

@@ -51,9 +51,16 @@ do
   T.eq(sum, 2000, "stretch histogram counts every triangle")
   sum = 0
   for _, n in ipairs(r.histograms.size) do sum = sum + n end
-  T.eq(#r.histograms.size, 10, "10 size bins")
+  local edges = r.histograms.size_edges
+  T.eq(#r.histograms.size, #edges - 1, "a size bin between two edges")
+  T.check(#r.histograms.size >= 5 and #r.histograms.size <= 10, "5 to 10 size bins: " .. #r.histograms.size)
   T.eq(sum, 2000, "size histogram counts every triangle")
   T.eq(r.histograms.size_max, q.size_max, "size bins up to the largest size")
+  T.check(edges[#edges] >= q.size_max and edges[#edges - 1] < q.size_max, "the last size bin holds the largest")
+  local step = edges[2] - edges[1]
+  local mant = step / 10 ^ math.floor(math.log(step, 10) + 1e-9)
+  T.check(math.abs(mant - 1) < 1e-9 or math.abs(mant - 2) < 1e-9 or math.abs(mant - 2.5) < 1e-9
+    or math.abs(mant - 5) < 1e-9, "size bins of a nice width: " .. step)
   sum = 0
   local vmax = 0
   for _, e in ipairs(r.histograms.valence) do
@@ -125,7 +132,7 @@ do
   for _, id in ipairs { "stretch-histogram", "size-histogram", "valence-histogram" } do
     T.check(s:find('<svg id="' .. id .. '"', 1, true), id)
   end
-  T.eq(count(s, '<rect class="bar"'), 10 + 10 + #r.histograms.valence, "one bar per bin")
+  T.eq(count(s, '<rect class="bar"'), 10 + #r.histograms.size + #r.histograms.valence, "one bar per bin")
   T.check(s:find("<td>2000</td>", 1, true), "Table 1 row in the page")
   T.check(s:find('<p id="deviation">Hausdorff deviation from the reference: <b>' .. report.text(r.quality):match(
     "hausdorff%s+(%S+)"), 1, true), "deviation in the page")
@@ -186,6 +193,134 @@ do
 end
 -- }======
 
+-- {====== axes: nice ticks that cover the data
+do
+  local function same(a, b) return table.concat(a, " ") == table.concat(b, " ") end
+  local t, st = report.ticks(0, 1586, 4)
+  T.check(same(t, { 0, 500, 1000, 1500, 2000 }), "counts to 1586: " .. table.concat(t, " "))
+  T.eq(st, 500, "step 500")
+  t = report.ticks(0, 18.1, 10)
+  T.check(same(t, { 0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20 }), "sizes to 18.1: " .. table.concat(t, " "))
+  t = report.ticks(3, 48, 8)
+  T.eq(t[#t], 50, "valence 3..48: the axis reaches 50")
+  T.eq(t[1], 0, "and starts at 0")
+  t, st = report.ticks(0.2437, 0.7712, 4)
+  T.check(same(t, { 0.2, 0.4, 0.6, 0.8 }), "stretch 0.24..0.77: " .. table.concat(t, " "))
+  T.eq(report.tick_text(0.30000000000000004, st), "0.3", "labels carry the step's decimals")
+  t, st = report.ticks(1500, 3000, 4)
+  T.check(same(t, { 1500, 2000, 2500, 3000 }), "elements 1500..3000: " .. table.concat(t, " "))
+  t, st = report.ticks(0.001, 0.0046, 4)
+  T.eq(report.tick_text(t[#t], st), "0.005", "small values")
+  t = report.ticks(5, 5)
+  T.check(t[1] < 5 and t[#t] > 5, "one value: an interval around it")
+  T.checkerr("finite numbers expected", report.ticks, 0, 1 / 0)
+end
+
+-- Every tick of a chart: a nice step, labels equally spaced.
+local function chart_ticks(svg, class)
+  local vals = {}
+  for v in svg:gmatch('class="tick ' .. class .. '"[^>]*>([^<]+)<') do vals[#vals + 1] = tonumber(v) end
+  return vals
+end
+local function nice_axis(vals, what)
+  T.check(#vals >= 2, what .. ": ticks")
+  local step = vals[2] - vals[1]
+  for i = 2, #vals do
+    T.check(math.abs(vals[i] - vals[i - 1] - step) < 1e-9 * math.max(1, step), what .. ": equal steps")
+  end
+  local mant = step / 10 ^ math.floor(math.log(step, 10) + 1e-9)
+  T.check(({ [1] = true, [2] = true, [2.5] = true, [5] = true })[tonumber(string.format("%.6g", mant))],
+    what .. ": a nice step " .. step)
+  for _, v in ipairs(vals) do
+    T.check(math.abs(v / step - math.floor(v / step + 0.5)) < 1e-6, what .. ": ticks on multiples of the step " .. v)
+  end
+end
+-- }======
+
+-- {====== the mesh page: rounded ticks, axes to their maxima, the stretch
+-- histogram's lowest bins visible, the threshold marked
+do
+  local pg = path("ticks.html")
+  local r = femlod.report(mesh, { html = pg, name = "fan2k", viewer = false, min_stretch = 0.3 })
+  local s = T.readfile(pg)
+  local q = r.quality
+  for _, id in ipairs { "stretch-histogram", "size-histogram", "valence-histogram" } do
+    local svg = s:match('<svg id="' .. id:gsub("%p", "%%%0") .. '".-</svg>')
+    local x, y = chart_ticks(svg, "xtick"), chart_ticks(svg, "ytick")
+    nice_axis(x, id .. " x")
+    if id ~= "stretch-histogram" then nice_axis(y, id .. " y") end
+    local most = 0
+    for c in svg:gmatch("<title>[^<]*: (%d+)</title>") do most = math.max(most, tonumber(c)) end
+    T.check(y[#y] >= most, id .. ": the count axis covers the largest bin " .. most .. " (" .. y[#y] .. ")")
+  end
+  local vsvg = s:match('<svg id="valence%-histogram".-</svg>')
+  local vx = chart_ticks(vsvg, "xtick")
+  T.check(vx[#vx] >= q.valence_max, "the valence axis covers the largest valence " .. q.valence_max)
+  local zx = chart_ticks(s:match('<svg id="size%-histogram".-</svg>'), "xtick")
+  T.check(zx[#zx] >= q.size_max, "the size axis covers the largest size")
+  -- the stretch histogram: log scale, counts on every bar, the threshold
+  local ssvg = s:match('<svg id="stretch%-histogram".-</svg>')
+  T.check(ssvg:find("log scale", 1, true), "stretch histogram on a log scale")
+  T.eq(count(ssvg, 'class="count"'), 10, "a count over every stretch bar")
+  local counted = {}
+  for c in ssvg:gmatch('class="count"[^>]*>(%d+)<') do counted[#counted + 1] = tonumber(c) end
+  T.eq(table.concat(counted, " "), table.concat(q.histogram, " "), "the counts are the histogram")
+  for h, c in ssvg:gmatch('<rect class="bar"[^>]* height="([%d.]+)"><title>[^<]*: (%d+)</title>') do
+    if tonumber(c) > 0 then T.check(tonumber(h) >= 2, "a bin of " .. c .. " is a visible bar: " .. h) end
+  end
+  local mx = ssvg:match('<line id="stretch%-histogram%-mark" x1="([%d.]+)"')
+  T.check(mx, "the threshold is marked")
+  -- the plot spans x 64..408 for stretch 0..1
+  T.check(math.abs(tonumber(mx) - (64 + 344 * 0.3)) < 0.01, "the mark at 0.3: " .. tostring(mx))
+  local below = q.histogram[1] + q.histogram[2] + q.histogram[3]
+  T.eq(r.below_min_stretch, below, "triangles below the threshold: the bins below 0.3")
+  T.check(ssvg:find("min_stretch 0.3: " .. below .. " triangle", 1, true), "the mark says how many are below")
+  T.check(s:find('<p id="below-threshold">', 1, true), "and the page says it in words")
+  -- default: the simplifier's default; false: no mark
+  r = femlod.report(mesh, { html = pg, viewer = false })
+  T.eq(r.min_stretch, 0.2, "default threshold: the simplifier's 0.2")
+  T.check(T.readfile(pg):find("default min_stretch 0.2", 1, true), "the default is named as such")
+  r = femlod.report(mesh, { html = pg, viewer = false, min_stretch = false })
+  T.check(not T.readfile(pg):find("histogram-mark", 1, true), "min_stretch = false: no mark")
+  T.eq(r.below_min_stretch, nil, "nor a count")
+  -- one sliver among good triangles: its bin is a visible bar with its count
+  local sl = femlod.mesh { positions = { { 0, 0, 0 }, { 1, 0, 0 }, { 0.5, 0.866, 0 }, { 0.5, -0.01, 0 } },
+    triangles = { { 1, 2, 3 }, { 1, 4, 2 } } }
+  r = femlod.report(sl, { html = pg, viewer = false })
+  s = T.readfile(pg):match('<svg id="stretch%-histogram".-</svg>')
+  local h1 = s:match('height="([%d.]+)"><title>stretch %[0%.0, 0%.1%): 1</title>')
+  T.check(h1 and tonumber(h1) >= 2, "a single sliver is a visible bar: " .. tostring(h1))
+  T.eq(r.below_min_stretch, 1, "one triangle below 0.2")
+  -- one valence only: whole-number ticks around it
+  local one = femlod.mesh { positions = { { 0, 0, 0 }, { 1, 0, 0 }, { 0.5, 0.8, 0 } }, triangles = { { 1, 2, 3 } } }
+  femlod.report(one, { html = pg, viewer = false })
+  T.eq(table.concat(chart_ticks(T.readfile(pg):match('<svg id="valence%-histogram".-</svg>'), "xtick"), " "),
+    "1 2 3", "a single valence: ticks 1 2 3")
+  os.remove(pg)
+end
+-- }======
+
+-- {====== a large mesh: shown through a copy simplified for display
+do
+  local pg = path("display.html")
+  local r = femlod.report(input, { html = pg, name = "fandisk", display_triangles = 3000 })
+  local s = T.readfile(pg)
+  T.check(r.display_triangles and r.display_triangles <= 3300, "a display copy near 3000: "
+    .. tostring(r.display_triangles))
+  T.check(s:find('<p class="note" id="display%-note">The 3D view shows a copy simplified for display with '
+    .. 'femlod%.simplify: ' .. r.display_triangles .. " of the mesh&#39;s 12946 triangles"), "the page says so")
+  T.check(s:find("<td>12946</td>", 1, true), "the table is the full mesh's")
+  local b64 = s:match('src="data:model/gltf%-binary;base64,([A-Za-z0-9+/=]+)"')
+  local full = input:encode("f.glb", { color_by = "stretch" })
+  T.check(#b64 * 3 / 4 < #full / 4, "the display GLB is a fraction of the full one: " .. #b64 * 3 // 4 .. " < "
+    .. #full)
+  local whole = femlod.report(input, { html = pg, name = "fandisk" })
+  T.eq(whole.display_triangles, nil, "below the default 20,000: the mesh itself")
+  T.check(not T.readfile(pg):find("display%-note"), "and no note")
+  os.remove(pg)
+end
+-- }======
+
 -- {====== an empty mesh: a page all the same
 do
   local empty = femlod.mesh {}
@@ -204,8 +339,12 @@ end
 T.checkerr("test_report%.lua:%d+: bad argument #1 to 'report' %(femlod.Mesh expected, got nil%)",
   function() femlod.report() end)
 T.checkerr("bad argument #1 to 'report' %(femlod.Mesh expected, got femlod.Hierarchy%)", femlod.report, h)
-T.checkerr("test_report%.lua:%d+: bad argument #2 to 'report' %(unknown option 'htm'; valid: html, name, "
-  .. "progress, reference, reference_name, title, viewer%)", function() femlod.report(mesh, { htm = "x" }) end)
+T.checkerr("test_report%.lua:%d+: bad argument #2 to 'report' %(unknown option 'htm'; valid: "
+  .. "display_triangles, html, min_stretch, name, progress, reference, reference_name, title, viewer%)",
+  function() femlod.report(mesh, { htm = "x" }) end)
+T.checkerr("min_stretch: number in %[0, 1%] or false expected, got 2", femlod.report, mesh, { min_stretch = 2 })
+T.checkerr("display_triangles: integer >= 100 or false expected, got 10", femlod.report, mesh,
+  { display_triangles = 10 })
 T.checkerr("bad argument #2 to 'report' %(table expected, got string%)", femlod.report, mesh, "x.html")
 T.checkerr("bad argument #2 to 'report' %(reference: femlod.Mesh or path expected, got table%)", femlod.report,
   mesh, { reference = {} })
@@ -262,6 +401,82 @@ do
   T.eq(count(s:match('<table id="points">.-</table>'), "<tr>"), 4, "header + a row per point")
   T.check(s:find("r.lua:3: &lt;boom&gt;", 1, true), "error text escaped")
   T.checkerr("manifest table expected", report.sweep_page, {}, sp)
+end
+-- }======
+
+-- {====== the sweep page: series by the second axis, labels apart, rounded
+-- ticks, an honest page when every point failed
+do
+  local function pt(i, target, ms, tri, avg, mn, dev)
+    return { index = i, status = "ok", params = { target = target, min_stretch = ms },
+      meshes = { { path = ("points/%03d/m.obj"):format(i), triangles = tri, stretch_avg = avg, stretch_min = mn,
+        size_max = 1, valence_max = 7, hausdorff_rel = dev } } }
+  end
+  -- two points almost on top of each other per target: their labels must not collide
+  local man = { digest = "d", recipe = { path = "sweep.lua" },
+    grid = { { name = "target", values = { 1500, 3000 } }, { name = "min_stretch", values = { 0.3, 0.5 } } },
+    points = { pt(0, 1500, 0.3, 1500, 0.7412, 0.3101, 0.0041), pt(1, 1500, 0.5, 1502, 0.7433, 0.3105, 0.0042),
+      pt(2, 3000, 0.3, 3000, 0.7671, 0.3302, 0.0023), pt(3, 3000, 0.5, 3001, 0.7688, 0.5013, 0.0024) } }
+  local sp = path("sweep2.html")
+  report.sweep_page(man, sp)
+  local s = T.readfile(sp)
+  local legend = s:match('<div class="series%-legend" id="series%-legend">(.-)</div>')
+  T.check(legend, "a legend for the second axis")
+  T.eq(count(legend or "", 'class="swatch"'), 2, "one entry per value")
+  T.check(legend and legend:find("min_stretch = 0.3", 1, true) and legend:find("min_stretch = 0.5", 1, true),
+    "named by value")
+  local c1, c2 = legend:match('background:(#%x+).-background:(#%x+)')
+  T.check(c1 and c2 and c1 ~= c2, "two colours")
+  for _, id in ipairs { "sweep-stretch-avg", "sweep-stretch-min", "sweep-deviation" } do
+    local svg = s:match('<svg id="' .. id:gsub("%p", "%%%0") .. '".-</svg>')
+    T.eq(count(svg, '<circle class="dot" style="fill:' .. c1 .. '"'), 2, id .. ": min_stretch 0.3 in its colour")
+    T.eq(count(svg, '<circle class="dot" style="fill:' .. c2 .. '"'), 2, id .. ": min_stretch 0.5 in its colour")
+    T.eq(count(svg, '<polyline class="series"'), 2, id .. ": a line per series")
+    nice_axis(chart_ticks(svg, "xtick"), id .. " x")
+    nice_axis(chart_ticks(svg, "ytick"), id .. " y")
+    -- label boxes (6 px a character, 10 px high, as placed) overlap no other label
+    local boxes = {}
+    for x, y, t in svg:gmatch('<text x="([%d.-]+)" y="([%d.-]+)" class="dotlabel">([^<]*)</text>') do
+      x, y = tonumber(x), tonumber(y)
+      boxes[#boxes + 1] = { x, y - 8, x + 6 * #t, y + 2 }
+    end
+    T.check(#boxes >= 2, id .. ": labels placed: " .. #boxes)
+    for i = 1, #boxes do
+      for j = i + 1, #boxes do
+        local a, b = boxes[i], boxes[j]
+        T.check(not (a[1] < b[3] and b[1] < a[3] and a[2] < b[4] and b[2] < a[4]), id .. ": labels " .. i .. " and "
+          .. j .. " apart")
+      end
+    end
+  end
+  T.check(s:find('id="counts">4 points: 4 ok, 0 failed', 1, true), "counts")
+  -- one axis: no legend, one colour
+  report.sweep_page({ grid = { { name = "target", values = { 1, 2 } } }, points = { pt(0, 1, nil, 10, 0.7, 0.3, 0.01),
+    pt(1, 2, nil, 20, 0.8, 0.4, 0.02) } }, sp)
+  s = T.readfile(sp)
+  T.check(not s:find("id=\"series-legend\"", 1, true), "one axis: no legend")
+  -- every point failed: no charts, no invented axis, words that count right
+  local failed = { grid = { { name = "target", values = { 1, 2, 3, 4 } } }, points = {} }
+  for i = 0, 3 do
+    failed.points[i + 1] = { index = i, status = "failed", params = { target = i + 1 }, meshes = {},
+      error = "sweep.lua:3: target: integer expected, got nil" }
+  end
+  report.sweep_page(failed, sp)
+  s = T.readfile(sp)
+  T.check(s:find('id="counts">4 points: 0 ok, 4 failed', 1, true), "all failed: counted")
+  T.check(s:find('<p class="failed" id="no%-results"><b>All 4 points failed%.</b> No point saved a mesh'),
+    "all failed: said plainly")
+  T.check(not s:find("<svg", 1, true), "no charts")
+  T.check(not s:find("-0.06", 1, true) and not s:find("1.06", 1, true), "no invented axis")
+  T.eq(count(s:match('<table id="points">.-</table>'), "<tr>"), 5, "the table still lists the points")
+  T.eq(count(s, "integer expected, got nil"), 4, "with their reasons")
+  failed.points = { failed.points[1] }
+  report.sweep_page(failed, sp)
+  s = T.readfile(sp)
+  T.check(s:find('id="counts">1 point: 0 ok, 1 failed', 1, true), "one point: singular")
+  T.check(s:find("<b>The point failed.</b>", 1, true), "one point failed")
+  T.check(not s:find("1 points", 1, true), "never '1 points'")
+  os.remove(sp)
 end
 -- }======
 

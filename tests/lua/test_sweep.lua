@@ -162,6 +162,11 @@ do
   T.eq(code, 1, "a point failed: exit 1")
   T.eq(err, "", "the sweep itself says nothing on stderr")
   T.check(out:find("point 001 mode=error: failed %(exit 1%)"), out)
+  -- the reason on the console, as results.csv has it: not just the exit status
+  local esc_crash = CRASH:gsub("%p", "%%%0")
+  T.check(out:find("point 001 mode=error: failed %(exit 1%), [%d.]+ s, [%d.]+ MB: " .. esc_crash
+    .. ":2: point failed on purpose\n"), "a failed point's reason on the console: " .. out)
+  T.check(out:find("point 000 mode=ok: ok, [%d.]+ s, [%d.]+ MB\n"), "an ok point has no reason: " .. out)
   T.check(out:find("point 002 mode=crash: crashed %(Killed%)"), out)
   T.check(out:find("4 points: 1 ok, 3 failed"), out)
   local rows = read_csv(dir .. "/results.csv")

@@ -3,12 +3,20 @@
 // and checks that they rendered:
 //
 //   node check.js mesh PAGE.html [--screenshot OUT.png]
-//     the three histograms are SVG with bars (the stretch one with 10), the
-//     model-viewer element loaded the embedded GLB, and its on-screen pixels
-//     are not blank (enough of them differ from the viewer's background);
+//     at 1400 x 1000: the 3D view is above the fold; the three histograms
+//     are SVG with bars (the stretch one with 10, each with its count, every
+//     non-empty one at least 2 px high, the threshold marked), their tick
+//     labels do not overlap; the model-viewer element loaded the embedded
+//     GLB, and its on-screen pixels are not blank (enough of them differ
+//     from the viewer's background); the page is under 3 MB;
 //   node check.js sweep PAGE.html POINTS [--screenshot OUT.png]
-//     the three scatter plots have POINTS dots each and the table POINTS rows;
-//   both: no console error and no uncaught exception from the page.
+//     the three scatter plots have POINTS dots each and the table POINTS
+//     rows; the point labels' rendered boxes do not overlap; with a second
+//     grid axis, a legend whose colours are the dots' colours;
+//   node check.js failed PAGE.html POINTS [--screenshot OUT.png]
+//     a sweep where every point failed: the message says so, no chart, the
+//     table has POINTS rows with their errors;
+//   all: no console error and no uncaught exception from the page.
 //
 // Exit 0 when every check passes, 1 otherwise (each failure on stderr).
 'use strict';
@@ -32,8 +40,8 @@ function check(cond, what) {
 
 async function main() {
   const [mode, page_path, ...rest] = process.argv.slice(2);
-  if (!['mesh', 'sweep'].includes(mode) || !page_path) {
-    console.error('usage: node check.js mesh PAGE.html [--screenshot OUT.png] | sweep PAGE.html POINTS [--screenshot OUT.png]');
+  if (!['mesh', 'sweep', 'failed'].includes(mode) || !page_path) {
+    console.error('usage: node check.js mesh PAGE.html [--screenshot OUT.png] | sweep|failed PAGE.html POINTS [--screenshot OUT.png]');
     process.exit(2);
   }
   if (!fs.existsSync(CHROMIUM)) {
@@ -49,7 +57,7 @@ async function main() {
   }
   const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'femlod-chromium-'));
   const context = await playwright.chromium.launchPersistentContext(profile, {
-    executablePath: CHROMIUM, headless: true, args: ARGS, viewport: { width: 1360, height: 900 },
+    executablePath: CHROMIUM, headless: true, args: ARGS, viewport: { width: 1400, height: 1000 },
   });
   try {
     const page = context.pages()[0] || await context.newPage();
@@ -61,7 +69,40 @@ async function main() {
     page.on('request', (r) => { if (!/^(file|data|blob):/.test(r.url())) requests.push(r.url()); });
     await page.goto('file://' + path.resolve(page_path), { waitUntil: 'load' });
 
+    // Boxes of elements (client rectangles) that overlap: [i, j] pairs.
+    const overlaps = (boxes) => {
+      const bad = [];
+      for (let i = 0; i < boxes.length; i++) {
+        for (let j = i + 1; j < boxes.length; j++) {
+          const a = boxes[i], b = boxes[j];
+          if (a.x < b.x + b.w && b.x < a.x + a.w && a.y < b.y + b.h && b.y < a.y + a.h) bad.push([a.t, b.t]);
+        }
+      }
+      return bad;
+    };
+    const rects = (sel) => page.$$eval(sel, (es) => es.map((e) => {
+      const r = e.getBoundingClientRect();
+      return { x: r.x, y: r.y, w: r.width, h: r.height, t: e.textContent };
+    }));
+
     if (mode === 'mesh') {
+      const bytes = fs.statSync(page_path).size;
+      check(bytes < 3e6, `page under 3 MB: ${(bytes / 1e6).toFixed(2)} MB`);
+      const top = await page.$eval('#viewer', (v) => { const r = v.getBoundingClientRect(); return [r.top, r.bottom]; });
+      check(top[1] <= 1000, `3D view above the fold at 1400 x 1000: top ${top[0]}, bottom ${top[1]}`);
+      const note = await page.$$eval('#display-note', (ns) => ns.map((n) => n.textContent));
+      if (note.length) console.log('     ' + note[0]);
+      const ncounts = await page.$$eval('#stretch-histogram text.count', (ts) => ts.length);
+      check(ncounts === 10, `a count over every stretch bar (${ncounts})`);
+      const heights = await page.$$eval('#stretch-histogram rect.bar', (rs) => rs.map((r) => [r.getBBox().height,
+        Number(r.querySelector('title').textContent.match(/(\d+)$/)[1])]));
+      check(heights.every(([h, n]) => n === 0 || h >= 2), 'every non-empty stretch bin is a visible bar: '
+        + heights.map(([h, n]) => `${n}:${h.toFixed(1)}`).join(' '));
+      check(await page.$('#stretch-histogram-mark') !== null, 'the threshold is marked');
+      for (const id of ['stretch-histogram', 'size-histogram', 'valence-histogram']) {
+        const bad = overlaps(await rects(`#${id} text.tick`));
+        check(bad.length === 0, `${id}: tick labels apart` + (bad.length ? ': ' + JSON.stringify(bad) : ''));
+      }
       for (const id of ['stretch-histogram', 'size-histogram', 'valence-histogram']) {
         const bars = await page.$$eval(`#${id} rect.bar`, (rs) => rs.map((r) => r.getBBox().height));
         check(bars.length > 0 && bars.some((h) => h > 0), `${id}: ${bars.length} bars, some visible`);
@@ -107,7 +148,7 @@ async function main() {
       const share = counts.differ / counts.total;
       check(share > 0.05, `viewer not blank: ${(100 * share).toFixed(1)}% of ${counts.total} pixels are the mesh`);
       check(counts.colours > 20, `viewer shows the colour map: ${counts.colours} distinct colours`);
-    } else {
+    } else if (mode === 'sweep') {
       const n = Number(rest[0]);
       for (const id of ['sweep-stretch-avg', 'sweep-stretch-min', 'sweep-deviation']) {
         const dots = await page.$$eval(`#${id} circle.dot`, (cs) => cs.map((c) => c.getBBox().width));
@@ -115,6 +156,30 @@ async function main() {
       }
       const rows = await page.$$eval('#points tr', (rs) => rs.length - 1);
       check(rows === n, `points table: ${rows} rows (want ${n})`);
+      for (const id of ['sweep-stretch-avg', 'sweep-stretch-min', 'sweep-deviation']) {
+        const labels = await rects(`#${id} text.dotlabel`);
+        const bad = overlaps(labels);
+        check(labels.length > 0 && bad.length === 0, `${id}: ${labels.length} point labels, none overlapping`
+          + (bad.length ? ': ' + JSON.stringify(bad) : ''));
+        const ticks = overlaps(await rects(`#${id} text.tick`));
+        check(ticks.length === 0, `${id}: tick labels apart`);
+      }
+      const fills = await page.$$eval('#sweep-stretch-avg circle.dot', (cs) => [...new Set(cs.map((c) => getComputedStyle(c).fill))]);
+      const swatches = await page.$$eval('#series-legend .swatch', (ss) => ss.map((s) => getComputedStyle(s).backgroundColor));
+      if (fills.length > 1) {
+        check(swatches.length === fills.length && fills.every((f) => swatches.includes(f)),
+          `series: ${fills.length} colours, each in the legend (${swatches.join(', ')})`);
+      }
+    } else {
+      const n = Number(rest[0]);
+      const msg = await page.$eval('#no-results', (p) => p.innerText).catch(() => '');
+      check(/All \d+ points failed\./.test(msg), `the page says every point failed: "${msg}"`);
+      const counts = await page.$eval('#counts', (p) => p.innerText);
+      check(counts.startsWith(`${n} points: 0 ok, ${n} failed`), `counts: "${counts}"`);
+      const svgs = await page.$$eval('svg.chart', (s) => s.length);
+      check(svgs === 0, `no chart drawn (${svgs})`);
+      const errs = await page.$$eval('#points tr', (rs) => rs.slice(1).map((r) => r.lastElementChild.textContent));
+      check(errs.length === n && errs.every((e) => e.length > 0), `points table: ${errs.length} rows, each with its error`);
     }
     const shot = rest.indexOf('--screenshot');
     if (shot >= 0 && rest[shot + 1]) {
