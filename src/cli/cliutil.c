@@ -17,6 +17,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 static const char *command_name;
 
@@ -85,6 +86,16 @@ const char *fl_cli_suggest(const char *word, size_t len, const char *const *name
 
 int fl_cli_unknown(const char *what, const char *word, size_t len, const char *const *names,
                    const char *list) {
+    /* The program's own options belong before the command word. */
+    static const char *const global[] = {"--seed",    "--quiet",      "-q",         "--verbose",
+                                         "-v",        "--traceback",  "--record",   "--sandbox",
+                                         "--max-memory", "--max-time", "--version", NULL};
+    for (const char *const *g = global; *g; g++)
+        if (strlen(*g) == len && strncmp(*g, word, len) == 0)
+            return fl_cli_usage_error("%.*s is an option of femlod, not of %s: put it before the "
+                                      "command (femlod %.*s %s ...)",
+                                      (int)len, word, command_name ? command_name : "the command",
+                                      (int)len, word, command_name ? command_name : "COMMAND");
     const char *near = fl_cli_suggest(word, len, names);
     if (near)
         return fl_cli_usage_error("unknown %s '%.*s'; did you mean %s?", what, (int)len, word, near);
@@ -126,6 +137,10 @@ int fl_cli_check_output(const char *path, const char *format) {
             return fl_cli_usage_error("%s: folder %s: %s", path, dir, strerror(errno));
         }
         if (!S_ISDIR(st.st_mode)) return fl_cli_usage_error("%s: %s is not a folder", path, dir);
+        if (access(dir, W_OK | X_OK) != 0)
+            return fl_cli_usage_error("%s: cannot write in folder %s: %s", path, dir, strerror(errno));
+    } else if (access(".", W_OK | X_OK) != 0) {
+        return fl_cli_usage_error("%s: cannot write in the current folder: %s", path, strerror(errno));
     }
     if (!format && femlod_format_from_path(path) == FEMLOD_FORMAT_AUTO)
         return fl_cli_usage_error("%s: unknown file extension (valid: .obj, .stl, .off, .ply, "
@@ -241,8 +256,7 @@ int fl_cli_read_options(lua_State *L, int argc, char **argv, int first, const fl
             }
             lua_pushlstring(L, a, (size_t)(name - a) + len);
         } else {
-            if (a[0] == '-' && a[1] != '\0' && !eq)
-                return fl_cli_usage_error("unknown option '%s' (options start with --)", a);
+            if (a[0] == '-' && a[1] != '\0' && !eq) return unknown_option(options, a, strlen(a), 1);
             if (!eq || eq == a) return fl_cli_usage_error("expected name=value, got '%s'", a);
             len = (size_t)(eq - a);
             o = find_option(options, a, len, 0);

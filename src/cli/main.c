@@ -751,10 +751,6 @@ static const simplify_opt simplify_opts[] = {
 };
 #define N_SIMPLIFY_OPTS (sizeof simplify_opts / sizeof simplify_opts[0])
 
-static const char SIMPLIFY_KEYS[] = "target, ratio, tolerance, max_deviation, min_stretch, "
-                                    "max_size, max_valence, feature_angle, feature_weight, "
-                                    "max_normal_change, keep_boundary, area_weighted, fast_above, threads, lock, "
-                                    "hierarchy, hierarchy_floor";
 
 /* Pushes the list "I,J,K" as a table of integers (range checked later,
  * against the mesh). */
@@ -832,16 +828,15 @@ static int set_simplify_opt(lua_State *L, int opts, int spell, const simplify_op
 /* The usage error for an unknown option of simplify (flag: spelled --name). */
 static int simplify_unknown(const char *word, size_t len, int flag) {
     const char *names[N_SIMPLIFY_OPTS + 1];
-    for (size_t k = 0; k < N_SIMPLIFY_OPTS; k++)
+    char list[512] = "";
+    size_t used = 0;
+    for (size_t k = 0; k < N_SIMPLIFY_OPTS; k++) {
         names[k] = flag ? simplify_opts[k].flag : simplify_opts[k].key;
+        used += (size_t)snprintf(list + used, used < sizeof list ? sizeof list - used : 0, "%s%s",
+                                 k ? ", " : "", names[k]);
+    }
     names[N_SIMPLIFY_OPTS] = NULL;
-    const char *near = fl_cli_suggest(word, len, names);
-    const char *what = flag ? "option" : "parameter";
-    if (near)
-        return fl_cli_usage_error("unknown %s '%.*s'; did you mean %s?", what, (int)len, word, near);
-    if (flag)
-        return fl_cli_usage_error("unknown option '%.*s' (see femlod help simplify)", (int)len, word);
-    return fl_cli_usage_error("unknown parameter '%.*s' (valid: %s)", (int)len, word, SIMPLIFY_KEYS);
+    return fl_cli_unknown(flag ? "option" : "parameter", word, len, names, list);
 }
 
 /* Reads the words after IN OUT into an option table; leaves the option
@@ -912,12 +907,13 @@ static int cmd_simplify(lua_State *L, const cli *c) {
     int st = simplify_options(L, c);
     if (st >= 0) return st;
     int spell = lua_gettop(L), opts = spell - 1;
-    if ((st = fl_cli_check_input(in, "mesh")) >= 0 || (st = fl_cli_check_output(out, NULL)) >= 0)
-        return st;
-    /* --hierarchy is the program's, not the simplification's. */
+    /* --hierarchy is the program's, not the simplification's. It is
+     * checked first, as it is written first. */
     lua_getfield(L, opts, "hierarchy");
     int flh = lua_gettop(L);
-    if (!lua_isnil(L, flh) && (st = fl_cli_check_output(lua_tostring(L, flh), "flh")) >= 0)
+    if ((st = fl_cli_check_input(in, "mesh")) >= 0 ||
+        (!lua_isnil(L, flh) && (st = fl_cli_check_output(lua_tostring(L, flh), "flh")) >= 0) ||
+        (st = fl_cli_check_output(out, NULL)) >= 0)
         return st;
     lua_pushnil(L);
     lua_setfield(L, opts, "hierarchy");
