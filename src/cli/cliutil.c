@@ -35,7 +35,7 @@ int fl_cli_usage_error(const char *fmt, ...) {
         fprintf(stderr, "\nusage: " FL_CLI_PROGNAME " %.*s (try '" FL_CLI_PROGNAME " help %s')\n",
                 len, synopsis, command_name);
     else
-        fputs("\nusage: " FL_CLI_PROGNAME " [options] COMMAND [ARGS] [name=value ...]"
+        fputs("\nusage: " FL_CLI_PROGNAME " [options] COMMAND [ARGS] [options of the command]"
               " (try '" FL_CLI_PROGNAME " --help')\n",
               stderr);
     fflush(stderr);

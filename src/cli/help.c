@@ -80,15 +80,15 @@ static const page pages[] = {
      "repair IN OUT [options]\n"
      "\n"
      "Repairs IN into OUT and prints what changed. Every step runs unless turned\n"
-     "off with false.\n"
+     "off with false (a switch alone is true).\n"
      "\n"
      "Options:\n"
      "  --weld TOL|false weld vertices closer than TOL (default 0: equal positions)\n"
-     "  --drop-degenerate true|false  drop zero-area triangles\n"
-     "  --drop-duplicates true|false  drop repeated triangles\n"
-     "  --split-nonmanifold true|false  cut non-manifold vertices\n"
-     "  --orient true|false  turn triangles to one orientation\n"
-     "  --drop-unused true|false  drop vertices no triangle uses\n"
+     "  --drop-degenerate B  drop degenerate triangles\n"
+     "  --drop-duplicates B  drop duplicate triangles\n"
+     "  --split-nonmanifold B  cut non-manifold vertices into copies\n"
+     "  --orient B       turn triangles to a consistent orientation\n"
+     "  --drop-unused B  drop vertices no triangle uses\n"
      "  --format FMT     write OUT in this format\n"
      "  --input-format FMT  read IN in this format\n"
      "\n"
@@ -107,9 +107,9 @@ static const page pages[] = {
      "  --tolerance X  --max-deviation X  --min-stretch X  --max-size X\n"
      "  --max-valence N  --feature-angle DEG  --feature-weight W\n"
      "  --max-normal-change DEG   the thresholds (each also takes off)\n"
-     "  --keep-boundary  never move or remove a boundary vertex\n"
-     "  --area-weighted  weigh the quadrics by triangle area\n"
-     "  --lock I,J,K     never move or remove these vertices (1-based)\n"
+     "  --keep-boundary  boundary vertices and edges stay\n"
+     "  --area-weighted  area-weighted quadrics\n"
+     "  --lock I,J,K     these vertices of IN keep their exact position (1-based)\n"
      "  --fast-above F|off  fast passes down to F x target (F >= 1)\n"
      "  --threads N      0: all processors (the output does not depend on it)\n"
      "  --hierarchy PART.flh  also write the vertex hierarchy, down to the\n"
@@ -188,15 +188,22 @@ static int write_only(const char *name) {
     return strcmp(name, "vtk") == 0 || strcmp(name, "inp") == 0;
 }
 
-/* FMT: every format name, the read-and-write ones first. */
-static void print_formats(FILE *f) {
-    fputs("FMT (read and write):", f);
-    for (const char *const *n = femlod_format_names(); *n; n++)
-        if (!write_only(*n)) fprintf(f, " %s", *n);
-    fputs("\n    (write only):", f);
-    for (const char *const *n = femlod_format_names(); *n; n++)
-        if (write_only(*n)) fprintf(f, " %s", *n);
+/* Prints the names of the formats that are (or are not) write only, after
+ * a label of width 16, wrapped before column 80. */
+static void print_format_row(FILE *f, const char *label, int writing_only) {
+    int col = fprintf(f, "%-16s", label);
+    for (const char *const *n = femlod_format_names(); *n; n++) {
+        if (write_only(*n) != writing_only) continue;
+        if (col + 1 + (int)strlen(*n) >= 80) col = fprintf(f, "\n%16s", "") - 1;
+        col += fprintf(f, " %s", *n);
+    }
     fputc('\n', f);
+}
+
+/* FMT: every format name, the ones read and written first. */
+static void print_formats(FILE *f) {
+    print_format_row(f, "FMT, read+write:", 0);
+    print_format_row(f, "     write only:", 1);
 }
 
 static void print_values(FILE *f) {

@@ -217,6 +217,7 @@ static int parse_args(lua_State *L, cli *c) {
             return EXIT_OK;
         }
         const char *topic = c->argv[i + 1];
+        if (strcmp(topic, "--help") == 0 || strcmp(topic, "-h") == 0) topic = "help";
         if (i + 2 < c->argc) return fl_cli_usage_error("help: one command expected, got '%s' too", c->argv[i + 2]);
         if (fl_cli_help_command(stdout, topic) == 0) return EXIT_OK;
         return unknown_command(topic);

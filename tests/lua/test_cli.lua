@@ -37,8 +37,8 @@ do
     "\n  convert IN OUT ", "\n  simplify IN OUT ", "\n  repair IN OUT ", "\n  report MESH ", "\n  sweep RECIPE%.lua ",
     "\n  lod PART%.flh OUT ", "\n  help %[COMMAND%] ", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-q, %-%-quiet ",
     "\n  %-v, %-%-verbose ", "\n  %-%-traceback ", "femlod help COMMAND, or femlod COMMAND %-%-help",
-    "\nFMT %(read and write%): obj stl stl_ascii stl_binary off ply ply_ascii ply_binary gltf glb msh msh2 medit\n"
-    .. "    %(write only%): vtk inp\n",
+    "\nFMT, read%+write: obj stl stl_ascii stl_binary off ply ply_ascii ply_binary gltf\n%s+glb msh msh2 medit\n"
+    .. "     write only: vtk inp\n",
     "Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded" } do
     T.check(out:find(want), "--help mentions " .. want)
   end
