@@ -3,7 +3,10 @@
  * simplify and lod commands (shaped like Lua's own lua.c: all work happens in pmain, under
  * lua_pcall, and errors are reported once, in main).
  *
- * Grammar: femlod [options] COMMAND [ARGS] [name=value ...]; see usage().
+ * Grammar: femlod [options] COMMAND [ARGS] [options of the command]; the
+ * help texts are in help.c, and what the commands share (usage errors, the
+ * reading of --name VALUE / name=VALUE options, the checks of input and
+ * output paths before any work) in cliutil.c.
  * Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded.
  *
  * The program never calls setlocale, so the C library stays in the "C"
