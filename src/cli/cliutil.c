@@ -124,6 +124,11 @@ int fl_cli_check_output(const char *path, const char *format) {
     struct stat st;
     if (path[n - 1] == '/' || (stat(path, &st) == 0 && S_ISDIR(st.st_mode)))
         return fl_cli_usage_error("%s: is a folder; give a file name", path);
+    /* The writers refuse to replace a file without write permission, even
+     * as root: so does the check. */
+    if (stat(path, &st) == 0 && S_ISREG(st.st_mode) && !(st.st_mode & 0222))
+        return fl_cli_usage_error("%s: cannot write: file is read-only (mode %04o)", path,
+                                  (unsigned)(st.st_mode & 07777));
     const char *slash = strrchr(path, '/');
     if (slash) {
         char dir[4096];

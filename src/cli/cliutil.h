@@ -40,15 +40,17 @@ const char *fl_cli_suggest(const char *word, size_t len, const char *const *name
 int fl_cli_unknown(const char *what, const char *word, size_t len, const char *const *names,
                    const char *list);
 
-/* Before any work: an input file that is a folder or a saved hierarchy (the
- * lod command's) is a usage error. what is "mesh" or "recipe". Returns -1 when
+/* Before any work: an input file that is a folder, or a saved hierarchy (the
+ * lod command's) given as a mesh, is a usage error. what is "mesh",
+ * "hierarchy" or "recipe". Returns -1 when
  * the path may be read (a missing file is left to the reader, exit 1), or
  * the usage error's exit status. */
 int fl_cli_check_input(const char *path, const char *what);
 
-/* Before any work: the output's folder exists and is a folder, the path is
- * not a folder, and (format NULL) the extension names a format the program
- * writes. Returns -1 or the usage error's exit status. */
+/* Before any work: the output's folder exists, is a folder and may be
+ * written in; the path is neither a folder nor a read-only file; and
+ * (format NULL) the extension names a format the program writes. Returns -1
+ * or the usage error's exit status. */
 int fl_cli_check_output(const char *path, const char *format);
 
 /* Pushes a name=value pair's value: Lua's number syntax, then true and

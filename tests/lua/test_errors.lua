@@ -391,7 +391,7 @@ end
   -- Existing read-only files: refused even as root, whose rename would work.
   case("read-only files", LOST .. "/rofiles", "cannot write: file is read-only (mode 0444)", nil,
     function(dir) os.execute("chmod 444 " .. quote(dir) .. "/*") end,
-    function(dir) os.execute("chmod 644 " .. quote(dir) .. "/*") end)
+    function(dir) os.execute("chmod 644 " .. quote(dir) .. "/*") end, "cannot write: file is read-only (mode 0444)")
   case("targets are folders", LOST .. "/folders", "cannot write: Is a directory", nil, "folders", nil,
     "is a folder; give a file name")
   case("missing folder", LOST .. "/missing/sub", "cannot create temporary file: No such file or directory",
