@@ -180,6 +180,7 @@ static int parse_args(lua_State *L, cli *c) {
         c->cmd = CMD_EVAL;
     } else if (strcmp(w, "run") == 0) {
         c->cmd = CMD_RUN;
+        fl_cli_set_command("run");
         /* femlod run --sandbox --allow out RECIPE.lua: the sandbox's options
          * may follow the word run. */
         while (i + 1 < c->argc && strncmp(c->argv[i + 1], "--", 2) == 0) {
@@ -193,7 +194,13 @@ static int parse_args(lua_State *L, cli *c) {
             }
             i++;
             int st = sandbox_option(c, &i);
-            if (st == -2) return fl_cli_usage_error("unknown option '%s'", c->argv[i]);
+            if (st == -2) {
+                static const char *const run_opts[] = {"--sandbox", "--allow", "--max-memory",
+                                                       "--max-time", "--help", NULL};
+                const char *a = c->argv[i], *eq = strchr(a, '=');
+                return fl_cli_unknown("option", a, eq ? (size_t)(eq - a) : strlen(a), run_opts,
+                                      "--sandbox, --allow, --max-memory, --max-time");
+            }
             if (st >= 0) return st;
         }
     } else if (strcmp(w, "info") == 0) {

@@ -887,6 +887,8 @@ do
   usage2("femlod: --report needs a value", "info", fandisk, "--report")
   usage2("femlod: -q is an option of femlod, not of info: put it before the command (femlod -q info ...)", "info",
     fandisk, "-q")
+  usage2("femlod: --quiet is an option of femlod, not of run: put it before the command (femlod --quiet run ...)",
+    "run", "--quiet", "x.lua")
   local fixed = dir .. "/fixed.obj"
   local _, a = run("repair", P.shared .. "/spider_binary.stl", fixed, "orient=false", "weld=false")
   local _, b = run("repair", P.shared .. "/spider_binary.stl", fixed, "--orient", "false", "--weld=false")
