@@ -3,7 +3,10 @@
  * simplify and lod commands (shaped like Lua's own lua.c: all work happens in pmain, under
  * lua_pcall, and errors are reported once, in main).
  *
- * Grammar: femlod [options] COMMAND [ARGS] [name=value ...]; see usage().
+ * Grammar: femlod [options] COMMAND [ARGS] [options of the command]; the
+ * help texts are in help.c, and what the commands share (usage errors, the
+ * reading of --name VALUE / name=VALUE options, the checks of input and
+ * output paths before any work) in cliutil.c.
  * Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded.
  *
  * The program never calls setlocale, so the C library stays in the "C"
@@ -11,12 +14,14 @@
  * number printing are locale independent.
  */
 #include "cliutil.h"
+#include "help.h"
 #include "lua/lfemlod.h"
 #include "sandbox.h"
 #include "sweep.h"
 
 #include <lualib.h>
 
+#include <errno.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -44,83 +49,6 @@ typedef struct cli {
     int operand;    /* first operand: recipe, code, mesh or input */
     int pairs;      /* first name=value pair */
 } cli;
-
-static void usage_text(FILE *f) {
-    fputs("usage: " PROGNAME " [options] COMMAND [ARGS] [name=value ...]\n"
-          "       " PROGNAME " [options] RECIPE.lua [name=value ...]\n"
-          "\n"
-          "Commands:\n"
-          "  run RECIPE.lua   run a Lua recipe ('-' reads it from standard input);\n"
-          "                   the name=value pairs are in the global table `params`\n"
-          "  -e CODE          run a line of Lua, with params as for run\n"
-          "  info MESH        print the mesh's quality report\n"
-          "                   report=text|row|fields  format=FMT  reference=MESH\n"
-          "  convert IN OUT   read IN and write OUT (format from the extension)\n"
-          "                   format=FMT (of OUT)  input_format=FMT (of IN)\n"
-          "                   glTF OUT: color_by=stretch|size|valence  normals=true\n"
-          "  repair IN OUT    repair IN into OUT and print what changed: weld=TOL|false\n"
-          "                   (default 0: equal positions)  drop_degenerate=  drop_duplicates=\n"
-          "                   split_nonmanifold=  orient=  drop_unused=  (true|false)\n"
-          "  simplify IN OUT  simplify IN into OUT; print the before/after report\n"
-          "                   --target N | --ratio R  (triangles, or output/input)\n"
-          "                   --tolerance X  --max-deviation X  --min-stretch X\n"
-          "                   --max-size X  --max-valence N  --feature-angle DEG\n"
-          "                   --feature-weight W  --max-normal-change DEG\n"
-          "                   (each of these also takes 'off')\n"
-          "                   --keep-boundary  --area-weighted  --lock I,J,K\n"
-          "                   --fast-above F  (fast passes down to F x target)\n"
-          "                   --threads N  (0: all processors; the output does not\n"
-          "                   depend on it)\n"
-          "                   --hierarchy PART.flh  (also write the vertex hierarchy,\n"
-          "                   down to the coarsest mesh the thresholds allow)\n"
-          "                   --hierarchy-floor N|off  (stop the hierarchy at N)\n"
-          "                   or as pairs: target=3000 min_stretch=0.3 lock=4,9\n"
-          "  lod PART.flh OUT --size T | --target N\n"
-          "                   write a mesh from a saved hierarchy: --size: the\n"
-          "                   coarsest front refined where a vertex's e_size (mean\n"
-          "                   edge length) exceeds T (0 gives the input, inf the\n"
-          "                   coarsest mesh); --target: N triangles from the saved\n"
-          "                   front, its density kept; also size=T, target=N\n"
-          "  sweep RECIPE.lua [name=value ...] --grid NAME=V1,V2,... [--grid ...]\n"
-          "                   run the recipe once per grid point (the last --grid\n"
-          "                   varies fastest), each in its own process; writes\n"
-          "                   DIR/points/NNN/, DIR/manifest.json, DIR/results.csv\n"
-          "                   --jobs N (default 2)  --out DIR (default sweep)\n"
-          "                   --emit-jobs (print one command per point instead)\n"
-          "                   --point N (run point N only)  --collect (write the\n"
-          "                   manifest from the points already run)\n"
-          "                   points run --sandbox, writing only in their folder:\n"
-          "                   --allow DIR (also read/write DIR)  --no-sandbox\n"
-          "  report MESH [--reference ORIGINAL] [--html OUT.html] [--no-viewer]\n"
-          "                   print the quality report and Table 1 rows (and the\n"
-          "                   deviation from ORIGINAL); write an HTML page with\n"
-          "                   histograms and the mesh in a 3D viewer\n"
-          "  help             print this help\n"
-          "\n"
-          "Options:\n"
-          "  --seed N         seed math.random with the integer N (default 0: runs repeat)\n"
-          "  -q, --quiet      print nothing but what the command is for\n"
-          "  -v, --verbose    also print each stage (load, simplify, build hierarchy,\n"
-          "                   write ...) with its time and key figures on stderr\n"
-          "  --traceback      add a Lua stack traceback to error messages\n"
-          "  --sandbox        run and -e: no os.execute, io.popen, os.remove ...; read\n"
-          "                   only the recipe's folder and --allow folders, write only\n"
-          "                   --allow folders (these four also follow the word run)\n"
-          "  --allow DIR      with --sandbox: let the recipe read and write DIR\n"
-          "  --max-memory SIZE  stop (exit 3) past SIZE bytes (suffix K, M, G)\n"
-          "  --max-time SECONDS stop (exit 3) after SECONDS of wall-clock time\n"
-          "  --record FILE    run: also write FILE, a JSON record of the parameters,\n"
-          "                   the files read and written (SHA-256) and the meshes saved\n"
-          "  -h, --help       print this help and exit\n"
-          "  --version        print the version and exit\n"
-          "\n"
-          "A value is a number when Lua reads it as one (3, -2.5, 1e3, 0x10), true and\n"
-          "false are booleans, anything else is a string. In run and -e the module is\n"
-          "also the global `femlod`.\n"
-          "FMT: obj stl stl_ascii stl_binary off ply ply_ascii ply_binary\n"
-          "Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded.\n",
-          f);
-}
 
 static void print_version(void) {
     printf(PROGNAME " " FEMLOD_VERSION_STRING " (" LUA_RELEASE ")\n");
@@ -176,6 +104,14 @@ static int looks_like_recipe(const char *s) {
     return strchr(s, '/') != NULL || (n > 4 && strcmp(s + n - 4, ".lua") == 0);
 }
 
+/* An unknown command word: the nearest command, or the list. */
+static int unknown_command(const char *w) {
+    const char *near = fl_cli_suggest(w, strlen(w), fl_cli_command_names);
+    if (near) return fl_cli_usage_error("unknown command '%s'; did you mean %s?", w, near);
+    return fl_cli_usage_error("unknown command '%s' (valid: run, -e, info, convert, repair, "
+                              "simplify, lod, sweep, report, help)", w);
+}
+
 /* Fills c from argv; returns -1 to go on, or an exit status (help, version,
  * usage error). */
 static int parse_args(lua_State *L, cli *c) {
@@ -188,7 +124,7 @@ static int parse_args(lua_State *L, cli *c) {
             break;
         }
         if (strcmp(a, "-h") == 0 || strcmp(a, "--help") == 0) {
-            usage_text(stdout);
+            fl_cli_help_overview(stdout);
             return EXIT_OK;
         }
         if (strcmp(a, "--version") == 0) {
@@ -218,7 +154,19 @@ static int parse_args(lua_State *L, cli *c) {
             if (st != EXIT_OK) return st;
         } else {
             int st = sandbox_option(c, &i);
-            if (st == -2) return fl_cli_usage_error("unknown option '%s'", a);
+            if (st == -2) {
+                static const char *const global[] = {
+                    "--seed", "--quiet", "--verbose", "--traceback", "--record", "--sandbox",
+                    "--allow", "--max-memory", "--max-time", "--help", "--version", NULL};
+                const char *eq = strchr(a, '=');
+                size_t len = eq ? (size_t)(eq - a) : strlen(a);
+                const char *near = fl_cli_suggest(a, len, global);
+                /* A command's option before the command word. */
+                if (!near)
+                    return fl_cli_usage_error("unknown option '%.*s' (the options of a command "
+                                              "follow it: femlod help COMMAND)", (int)len, a);
+                return fl_cli_usage_error("unknown option '%.*s'; did you mean %s?", (int)len, a, near);
+            }
             if (st >= 0) return st;
         }
     }
@@ -232,16 +180,27 @@ static int parse_args(lua_State *L, cli *c) {
         c->cmd = CMD_EVAL;
     } else if (strcmp(w, "run") == 0) {
         c->cmd = CMD_RUN;
+        fl_cli_set_command("run");
         /* femlod run --sandbox --allow out RECIPE.lua: the sandbox's options
          * may follow the word run. */
         while (i + 1 < c->argc && strncmp(c->argv[i + 1], "--", 2) == 0) {
+            if (strcmp(c->argv[i + 1], "--help") == 0) {
+                fl_cli_help_command(stdout, "run");
+                return EXIT_OK;
+            }
             if (strcmp(c->argv[i + 1], "--") == 0) {
                 i++;
                 break;
             }
             i++;
             int st = sandbox_option(c, &i);
-            if (st == -2) return fl_cli_usage_error("unknown option '%s'", c->argv[i]);
+            if (st == -2) {
+                static const char *const run_opts[] = {"--sandbox", "--allow", "--max-memory",
+                                                       "--max-time", "--help", NULL};
+                const char *a = c->argv[i], *eq = strchr(a, '=');
+                return fl_cli_unknown("option", a, eq ? (size_t)(eq - a) : strlen(a), run_opts,
+                                      "--sandbox, --allow, --max-memory, --max-time");
+            }
             if (st >= 0) return st;
         }
     } else if (strcmp(w, "info") == 0) {
@@ -263,14 +222,34 @@ static int parse_args(lua_State *L, cli *c) {
     } else if (strcmp(w, "report") == 0) {
         c->cmd = CMD_REPORT;
     } else if (strcmp(w, "help") == 0) {
-        usage_text(stdout);
-        return EXIT_OK;
+        if (i + 1 >= c->argc) {
+            fl_cli_help_overview(stdout);
+            return EXIT_OK;
+        }
+        const char *topic = c->argv[i + 1];
+        if (strcmp(topic, "--help") == 0 || strcmp(topic, "-h") == 0) topic = "help";
+        if (i + 2 < c->argc) return fl_cli_usage_error("help: one command expected, got '%s' too", c->argv[i + 2]);
+        if (fl_cli_help_command(stdout, topic) == 0) return EXIT_OK;
+        return unknown_command(topic);
     } else if (looks_like_recipe(w) || strcmp(w, "-") == 0) {
         c->cmd = CMD_RUN; /* femlod RECIPE.lua, as lua RECIPE.lua */
         need = 0;
         i--;              /* the word itself is the operand */
     } else {
-        return fl_cli_usage_error("unknown command '%s'", w);
+        return unknown_command(w);
+    }
+    static const char *const names[] = {"", "run", "-e", "info", "convert", "simplify",
+                                        "lod", "sweep", "report", "repair"};
+    if (need) fl_cli_set_command(names[c->cmd]);
+    /* femlod COMMAND --help (or -h): the command's page. For run and -e only
+     * right after the word: what follows the recipe is the recipe's. */
+    for (int k = i + 1; k < c->argc && need; k++) {
+        const char *a = c->argv[k];
+        if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+            fl_cli_help_command(stdout, names[c->cmd]);
+            return EXIT_OK;
+        }
+        if (c->cmd == CMD_RUN || c->cmd == CMD_EVAL) break;
     }
     c->operand = i + 1;
     if (c->operand + need > c->argc) {
@@ -293,16 +272,6 @@ static int parse_args(lua_State *L, cli *c) {
     return -1;
 }
 
-/* Pushes a name=value pair's value: Lua's number syntax, then booleans. */
-static void push_value(lua_State *L, const char *s) {
-    if (strcmp(s, "true") == 0)
-        lua_pushboolean(L, 1);
-    else if (strcmp(s, "false") == 0)
-        lua_pushboolean(L, 0);
-    else if (lua_stringtonumber(L, s) == 0)
-        lua_pushstring(L, s);
-}
-
 /* Builds the table of the name=value pairs. A pair given twice is an error:
  * in a sweep it is far more often a mistake than an override. */
 static int push_pairs(lua_State *L, const cli *c) {
@@ -318,7 +287,7 @@ static int push_pairs(lua_State *L, const cli *c) {
         }
         lua_pop(L, 1);
         lua_pushlstring(L, a, (size_t)(eq - a));
-        push_value(L, eq + 1);
+        fl_cli_push_value(L, eq + 1);
         lua_rawset(L, -3);
     }
     return -1;
@@ -384,6 +353,14 @@ static int record_start(lua_State *L) {
     return 0;
 }
 
+/* Whether path opens for reading (errno says why not). */
+static int readable(const char *path) {
+    FILE *f = fopen(path, "r");
+    if (!f) return 0;
+    fclose(f);
+    return 1;
+}
+
 /* Runs a recipe or a line of code with params and arg set, the module in
  * the global `femlod`, math.random seeded, and the sandbox and caps in
  * force when asked for. */
@@ -407,6 +384,17 @@ static int cmd_lua(lua_State *L, const cli *c) {
                      c->cmd == CMD_EVAL || strcmp(src, "-") == 0 ? NULL : src);
     if (c->cmd == CMD_EVAL) {
         status = luaL_loadbufferx(L, src, strlen(src), "=(command line)", "t");
+    } else if (strcmp(src, "-") != 0 && (st = fl_cli_check_input(src, "recipe")) >= 0) {
+        return st;
+    } else if (strcmp(src, "-") != 0 && !readable(src)) {
+        /* In the words of every other "cannot open" (lauxlib's differ). */
+        int e = errno;
+        fprintf(stderr, PROGNAME ": %s: cannot open: %s\n", src, strerror(e));
+        if (c->record) {
+            lua_pushfstring(L, "%s: cannot open: %s", src, strerror(e));
+            fl_record_write(L, c->record, lua_tostring(L, -1));
+        }
+        return EXIT_ERROR;
     } else {
         /* Text only: bytecode can crash the interpreter (manual, load). */
         status = luaL_loadfilex(L, strcmp(src, "-") == 0 ? NULL : src, "t");
@@ -438,20 +426,21 @@ static int cmd_lua(lua_State *L, const cli *c) {
  * recipe position (there is no Lua caller for luaL_error to name).
  * ===================================================================== */
 
-/* Checks that every pair's name is in keys and its value a string; leaves
- * the pairs table on the stack. */
-static int check_pairs(lua_State *L, const cli *c, const char *const keys[], const char *list) {
-    int st = push_pairs(L, c);
+/* Reads the command's options (--name VALUE, --name=VALUE, name=VALUE)
+ * after its operands; leaves the spelling table and, on top, the values. */
+static int check_pairs(lua_State *L, const cli *c, const fl_cli_option *options) {
+    int st = fl_cli_read_options(L, c->argc, c->argv, c->pairs, options);
     if (st >= 0) return st;
-    lua_pushnil(L);
-    while (lua_next(L, -2)) {
-        const char *k = lua_tostring(L, -2);
-        int known = 0;
-        for (int i = 0; keys[i]; i++) known |= strcmp(keys[i], k) == 0;
-        lua_pop(L, 1);
-        if (!known) return fl_cli_usage_error("unknown parameter '%s' (valid: %s)", k, list);
-    }
+    lua_insert(L, -2);
     return -1;
+}
+
+/* How the user spelled option key: "--color-by" or "color_by". */
+static const char *spelling(lua_State *L, int pairs, const char *key) {
+    lua_getfield(L, pairs - 1, key);
+    const char *s = lua_tostring(L, -1);
+    lua_pop(L, 1); /* the string stays alive in the spelling table */
+    return s ? s : key;
 }
 
 /* The string value of a pair (converted back from a number if need be:
@@ -475,6 +464,10 @@ static int check_format(const char *key, const char *name) {
         size_t n = 0;
         for (const char *const *f = femlod_format_names(); *f && n + 16 < sizeof valid; f++)
             n += (size_t)snprintf(valid + n, sizeof valid - n, "%s%s", n ? ", " : "", *f);
+        const char *near = fl_cli_suggest(name, strlen(name), femlod_format_names());
+        if (near)
+            return fl_cli_usage_error("%s: unknown format '%s'; did you mean %s? (valid: %s)", key,
+                                      name, near, valid);
         return fl_cli_usage_error("%s: unknown format '%s' (valid: %s)", key, name, valid);
     }
     return -1;
@@ -485,8 +478,8 @@ static int check_format(const char *key, const char *name) {
 static int io_formats(lua_State *L, int pairs, const char **format, const char **input_format) {
     *format = pair_string(L, pairs, "format");
     *input_format = pair_string(L, pairs, "input_format");
-    int st = check_format("format", *format);
-    return st >= 0 ? st : check_format("input_format", *input_format);
+    int st = check_format(spelling(L, pairs, "format"), *format);
+    return st >= 0 ? st : check_format(spelling(L, pairs, "input_format"), *input_format);
 }
 
 /* Pushes a femlod.progress bar labelled label (drawn only when stderr is a
@@ -528,8 +521,8 @@ static const char *base_name(const char *path) {
 }
 
 static int cmd_info(lua_State *L, const cli *c) {
-    static const char *const keys[] = {"format", "reference", "report", NULL};
-    int st = check_pairs(L, c, keys, "format, reference, report");
+    static const fl_cli_option keys[] = {{"format", 0}, {"reference", 0}, {"report", 0}, {NULL, 0}};
+    int st = check_pairs(L, c, keys);
     if (st >= 0) return st;
     int pairs = lua_gettop(L);
     const char *format = pair_string(L, pairs, "format");
@@ -537,10 +530,13 @@ static int cmd_info(lua_State *L, const cli *c) {
     const char *mode = pair_string(L, pairs, "report");
     if (!mode) mode = "text";
     if (strcmp(mode, "text") != 0 && strcmp(mode, "row") != 0 && strcmp(mode, "fields") != 0)
-        return fl_cli_usage_error("report: unknown report '%s' (valid: text, row, fields)", mode);
-    if ((st = check_format("format", format)) >= 0) return st;
+        return fl_cli_usage_error("%s: unknown report '%s' (valid: text, row, fields)",
+                                  spelling(L, pairs, "report"), mode);
+    if ((st = check_format(spelling(L, pairs, "format"), format)) >= 0) return st;
 
     const char *path = c->argv[c->operand];
+    if ((st = fl_cli_check_input(path, "mesh")) >= 0) return st;
+    if (reference && (st = fl_cli_check_input(reference, "mesh")) >= 0) return st;
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);
     fl_cli_load_mesh(L, module, path, format);
@@ -587,14 +583,46 @@ static void print_written(const char *out, const char *format, lua_Integer trian
 }
 
 static int cmd_convert(lua_State *L, const cli *c) {
-    static const char *const keys[] = {"format", "input_format", "color_by", "normals", NULL};
-    int st = check_pairs(L, c, keys, "format, input_format, color_by, normals");
+    static const fl_cli_option keys[] = {{"format", 0},   {"input_format", 0}, {"color_by", 0},
+                                         {"normals", 1}, {NULL, 0}};
+    int st = check_pairs(L, c, keys);
     if (st >= 0) return st;
     int pairs = lua_gettop(L);
     const char *format, *input_format;
     if ((st = io_formats(L, pairs, &format, &input_format)) >= 0) return st;
-
     const char *in = c->argv[c->operand], *out = c->argv[c->operand + 1];
+    if ((st = fl_cli_check_input(in, "mesh")) >= 0 || (st = fl_cli_check_output(out, format)) >= 0)
+        return st;
+    /* The glTF options: their values, and that OUT is glTF. */
+    int gltf_opts = 0;
+    if (lua_getfield(L, pairs, "color_by") != LUA_TNIL) {
+        static const char *const measures[] = {"stretch", "size", "valence", "none", NULL};
+        const char *m = lua_type(L, -1) == LUA_TSTRING ? lua_tostring(L, -1) : NULL;
+        int known = 0;
+        for (int k = 0; m && measures[k]; k++) known |= strcmp(measures[k], m) == 0;
+        if (!known) {
+            const char *v = luaL_tolstring(L, -1, NULL);
+            const char *near = fl_cli_suggest(v, strlen(v), measures);
+            return fl_cli_usage_error("%s: unknown measure '%s'%s%s%s (valid: stretch, size, valence, none)",
+                                      spelling(L, pairs, "color_by"), v, near ? "; did you mean " : "",
+                                      near ? near : "", near ? "?" : "");
+        }
+        gltf_opts = 1;
+    }
+    if (lua_getfield(L, pairs, "normals") != LUA_TNIL) {
+        if (!lua_isboolean(L, -1))
+            return fl_cli_usage_error("%s: true or false expected, got '%s'",
+                                      spelling(L, pairs, "normals"), luaL_tolstring(L, -1, NULL));
+        gltf_opts = 1;
+    }
+    lua_pop(L, 2);
+    if (gltf_opts) {
+        femlod_format f = format ? femlod_format_from_name(format) : femlod_format_from_path(out);
+        if (f != FEMLOD_FORMAT_GLTF && f != FEMLOD_FORMAT_GLB)
+            return fl_cli_usage_error("%s: color_by and normals are glTF options; %s is %s, not "
+                                      "gltf or glb", out, out, femlod_format_name(f));
+    }
+
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);
     fl_cli_load_mesh(L, module, in, input_format);
@@ -625,15 +653,19 @@ static int cmd_convert(lua_State *L, const cli *c) {
  * printed. */
 static int cmd_repair(lua_State *L, const cli *c) {
     static const char *const keys[] = {"weld", "drop_degenerate", "drop_duplicates",
-                                       "split_nonmanifold", "orient", "drop_unused",
-                                       "format", "input_format", NULL};
-    int st = check_pairs(L, c, keys, "weld, drop_degenerate, drop_duplicates, split_nonmanifold, "
-                                     "orient, drop_unused, format, input_format");
+                                       "split_nonmanifold", "orient", "drop_unused"};
+    static const fl_cli_option options[] = {
+        {"weld", 0},   {"drop_degenerate", 1}, {"drop_duplicates", 1}, {"split_nonmanifold", 1},
+        {"orient", 1}, {"drop_unused", 1},     {"format", 0},          {"input_format", 0},
+        {NULL, 0}};
+    int st = check_pairs(L, c, options);
     if (st >= 0) return st;
     int pairs = lua_gettop(L);
     const char *format, *input_format;
     if ((st = io_formats(L, pairs, &format, &input_format)) >= 0) return st;
     const char *in = c->argv[c->operand], *out = c->argv[c->operand + 1];
+    if ((st = fl_cli_check_input(in, "mesh")) >= 0 || (st = fl_cli_check_output(out, format)) >= 0)
+        return st;
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);
     /* the repair options: the pairs without the two formats, checked here
@@ -645,10 +677,10 @@ static int cmd_repair(lua_State *L, const cli *c) {
         if (k == 0 && t == LUA_TNUMBER) {
             double w = (double)lua_tonumber(L, -1);
             if (!(w >= 0.0) || !(w < HUGE_VAL))
-                return fl_cli_usage_error("weld: a finite length >= 0 or false expected, got %s",
-                                          lua_tostring(L, -1));
+                return fl_cli_usage_error("%s: a finite length >= 0 or false expected, got %s",
+                                          spelling(L, pairs, "weld"), lua_tostring(L, -1));
         } else if (t != LUA_TNIL && t != LUA_TBOOLEAN) {
-            return fl_cli_usage_error("%s: %s expected, got '%s'", keys[k],
+            return fl_cli_usage_error("%s: %s expected, got '%s'", spelling(L, pairs, keys[k]),
                                       k == 0 ? "a length or false" : "true or false",
                                       luaL_tolstring(L, -1, NULL));
         }
@@ -730,10 +762,6 @@ static const simplify_opt simplify_opts[] = {
 };
 #define N_SIMPLIFY_OPTS (sizeof simplify_opts / sizeof simplify_opts[0])
 
-static const char SIMPLIFY_KEYS[] = "target, ratio, tolerance, max_deviation, min_stretch, "
-                                    "max_size, max_valence, feature_angle, feature_weight, "
-                                    "max_normal_change, keep_boundary, area_weighted, fast_above, threads, lock, "
-                                    "hierarchy, hierarchy_floor";
 
 /* Pushes the list "I,J,K" as a table of integers (range checked later,
  * against the mesh). */
@@ -808,6 +836,20 @@ static int set_simplify_opt(lua_State *L, int opts, int spell, const simplify_op
     return -1;
 }
 
+/* The usage error for an unknown option of simplify (flag: spelled --name). */
+static int simplify_unknown(const char *word, size_t len, int flag) {
+    const char *names[N_SIMPLIFY_OPTS + 1];
+    char list[512] = "";
+    size_t used = 0;
+    for (size_t k = 0; k < N_SIMPLIFY_OPTS; k++) {
+        names[k] = flag ? simplify_opts[k].flag : simplify_opts[k].key;
+        used += (size_t)snprintf(list + used, used < sizeof list ? sizeof list - used : 0, "%s%s",
+                                 k ? ", " : "", names[k]);
+    }
+    names[N_SIMPLIFY_OPTS] = NULL;
+    return fl_cli_unknown(flag ? "option" : "parameter", word, len, names, list);
+}
+
 /* Reads the words after IN OUT into an option table; leaves the option
  * table and the spelling table on the stack. */
 static int simplify_options(lua_State *L, const cli *c) {
@@ -825,7 +867,7 @@ static int simplify_options(lua_State *L, const cli *c) {
             for (size_t k = 0; k < N_SIMPLIFY_OPTS && !o; k++)
                 if (strlen(simplify_opts[k].flag) == len && strncmp(simplify_opts[k].flag, a, len) == 0)
                     o = &simplify_opts[k];
-            if (!o) return fl_cli_usage_error("unknown option '%.*s'", (int)len, a);
+            if (!o) return simplify_unknown(a, len, 1);
             name = lua_pushlstring(L, a, len); /* popped at the end of the iteration */
             if (eq) {
                 value = eq + 1;
@@ -841,9 +883,7 @@ static int simplify_options(lua_State *L, const cli *c) {
             for (size_t k = 0; k < N_SIMPLIFY_OPTS && !o; k++)
                 if (strlen(simplify_opts[k].key) == len && strncmp(simplify_opts[k].key, a, len) == 0)
                     o = &simplify_opts[k];
-            if (!o)
-                return fl_cli_usage_error("unknown parameter '%.*s' (valid: %s)", (int)len, a,
-                                          SIMPLIFY_KEYS);
+            if (!o) return simplify_unknown(a, len, 0);
             name = lua_pushlstring(L, a, len);
             value = eq + 1;
         }
@@ -862,7 +902,10 @@ static int simplify_options(lua_State *L, const cli *c) {
                                       lua_tostring(L, -1));
         }
         lua_getfield(L, spell, key);
-        return fl_cli_usage_error("%s: %s", lua_tostring(L, -1), msg);
+        /* The binding's words for a Lua table; on the command line a
+         * threshold is turned off with "off". */
+        const char *cli_msg = luaL_gsub(L, msg, " or boolean", " or off");
+        return fl_cli_usage_error("%s: %s", lua_tostring(L, -2), cli_msg);
     }
     lua_settop(L, spell);
     return -1;
@@ -875,9 +918,14 @@ static int cmd_simplify(lua_State *L, const cli *c) {
     int st = simplify_options(L, c);
     if (st >= 0) return st;
     int spell = lua_gettop(L), opts = spell - 1;
-    /* --hierarchy is the program's, not the simplification's. */
+    /* --hierarchy is the program's, not the simplification's. It is
+     * checked first, as it is written first. */
     lua_getfield(L, opts, "hierarchy");
     int flh = lua_gettop(L);
+    if ((st = fl_cli_check_input(in, "mesh")) >= 0 ||
+        (!lua_isnil(L, flh) && (st = fl_cli_check_output(lua_tostring(L, flh), "flh")) >= 0) ||
+        (st = fl_cli_check_output(out, NULL)) >= 0)
+        return st;
     lua_pushnil(L);
     lua_setfield(L, opts, "hierarchy");
     /* Without a hierarchy to write, the collapses past the target would be
@@ -910,6 +958,28 @@ static int cmd_simplify(lua_State *L, const cli *c) {
         lua_pop(L, 1);
     }
     lua_pop(L, 1);
+
+    /* A target at or above the input's size leaves nothing to do: say so,
+     * since the report alone would look like a failure. */
+    if (!c->quiet) {
+        call_method(L, mesh, "counts", 0, 1);
+        lua_getfield(L, -1, "triangles");
+        lua_Integer nt = lua_tointeger(L, -1);
+        lua_pop(L, 2);
+        int tt = lua_getfield(L, opts, "target"), rt = lua_getfield(L, opts, "ratio");
+        if (tt == LUA_TNUMBER && lua_tonumber(L, -2) >= (lua_Number)nt) {
+            lua_getfield(L, spell, "target");
+            fprintf(stderr, PROGNAME ": %s %s is not below %s's %lld triangles: nothing to simplify\n",
+                    lua_tostring(L, -1), lua_tostring(L, -3), base_name(in), (long long)nt);
+            lua_pop(L, 1);
+        } else if (rt == LUA_TNUMBER && lua_tonumber(L, -1) >= 1) {
+            lua_getfield(L, spell, "ratio");
+            fprintf(stderr, PROGNAME ": %s %s keeps all of %s's %lld triangles: nothing to simplify\n",
+                    lua_tostring(L, -1), lua_tostring(L, -2), base_name(in), (long long)nt);
+            lua_pop(L, 1);
+        }
+        lua_pop(L, 2);
+    }
 
     /* A progress bar on stderr when it is a terminal (femlod.progress); it
      * covers the building of the hierarchy too. */
@@ -999,8 +1069,10 @@ static int lod_options(lua_State *L, const cli *c, double *size, lua_Integer *ta
                 name = "--size";
             else if (len == 8 && strncmp(a, "--target", 8) == 0)
                 name = "--target";
-            else
-                return fl_cli_usage_error("unknown option '%.*s' (valid: --size, --target)", (int)len, a);
+            else {
+                static const char *const flags[] = {"--size", "--target", NULL};
+                return fl_cli_unknown("option", a, len, flags, "--size, --target");
+            }
             if (eq) {
                 value = eq + 1;
             } else {
@@ -1015,8 +1087,10 @@ static int lod_options(lua_State *L, const cli *c, double *size, lua_Integer *ta
                 name = "size";
             else if (len == 6 && strncmp(a, "target", 6) == 0)
                 name = "target";
-            else
-                return fl_cli_usage_error("unknown parameter '%.*s' (valid: size, target)", (int)len, a);
+            else {
+                static const char *const keys[] = {"size", "target", NULL};
+                return fl_cli_unknown("parameter", a, len, keys, "size, target");
+            }
             value = eq + 1;
         }
         is_target = strstr(name, "target") != NULL;
@@ -1058,6 +1132,8 @@ static int cmd_lod(lua_State *L, const cli *c) {
     const char *spelled;
     int st = lod_options(L, c, &size, &target, &spelled);
     if (st >= 0) return st;
+    if ((st = fl_cli_check_input(in, "hierarchy")) >= 0 || (st = fl_cli_check_output(out, NULL)) >= 0)
+        return st;
 
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);

@@ -20,48 +20,35 @@ static const char *base_name(const char *path) {
     return slash ? slash + 1 : path;
 }
 
-/* --opt VALUE or --opt=VALUE; NULL when the value is missing. */
-static const char *value_of(const fl_sweep_cli *c, int *i, const char *opt) {
-    const char *a = c->argv[*i];
-    size_t n = strlen(opt);
-    if (a[n] == '=') return a + n + 1;
-    if (*i + 1 >= c->argc) return NULL;
-    return c->argv[++*i];
-}
-
-static int is_opt(const char *a, const char *opt) {
-    size_t n = strlen(opt);
-    return strncmp(a, opt, n) == 0 && (a[n] == '\0' || a[n] == '=');
-}
-
 int fl_report_main(lua_State *L, const fl_sweep_cli *c) {
     const char *mesh = c->argv[c->operand], *ref = NULL, *html = NULL;
-    int viewer = 1;
     if (strncmp(mesh, "--", 2) == 0) return fl_cli_usage_error("report: MESH comes first, then the options");
-    for (int i = c->operand + 1; i < c->argc; i++) {
-        const char *a = c->argv[i];
-        const char **slot = NULL;
-        const char *opt = NULL;
-        if (is_opt(a, "--reference")) {
-            slot = &ref;
-            opt = "--reference";
-        } else if (is_opt(a, "--html")) {
-            slot = &html;
-            opt = "--html";
-        } else if (strcmp(a, "--no-viewer") == 0) {
-            viewer = 0;
-            continue;
-        } else {
-            const char *eq = strchr(a, '=');
-            return fl_cli_usage_error("report: unknown option '%.*s' (valid: --reference, --html, --no-viewer)",
-                                      (int)(eq && strncmp(a, "--", 2) == 0 ? (size_t)(eq - a) : strlen(a)), a);
-        }
-        if (*slot) return fl_cli_usage_error("option given twice: '%s'", opt);
-        const char *v = value_of(c, &i, opt);
-        if (!v) return fl_cli_usage_error("%s needs a value", opt);
-        if (!*v) return fl_cli_usage_error("%s: file name expected, got ''", opt);
-        *slot = v;
+    /* --reference X, --html X, --no-viewer, or as pairs: reference=X ... */
+    static const fl_cli_option options[] = {{"reference", 0}, {"html", 0}, {"viewer", 1}, {NULL, 0}};
+    int st = fl_cli_read_options(L, c->argc, c->argv, c->operand + 1, options);
+    if (st >= 0) return st;
+    int values = lua_gettop(L) - 1, spell = values + 1;
+    static const char *const files[] = {"reference", "html"};
+    for (int k = 0; k < 2; k++) {
+        if (lua_getfield(L, values, files[k]) == LUA_TNIL) continue;
+        /* reference=1 names a file called 1 */
+        const char *v = lua_type(L, -1) == LUA_TBOOLEAN ? NULL : luaL_tolstring(L, -1, NULL);
+        lua_getfield(L, spell, files[k]);
+        if (!v || !*v)
+            return fl_cli_usage_error("%s: file name expected, got '%s'", lua_tostring(L, -1),
+                                      v ? v : luaL_tolstring(L, -3, NULL));
+        if (k == 0) ref = v;
+        else html = v;
     }
+    if (lua_getfield(L, values, "viewer") != LUA_TNIL && !lua_isboolean(L, -1)) {
+        lua_getfield(L, spell, "viewer");
+        return fl_cli_usage_error("%s: true or false expected, got '%s'", lua_tostring(L, -1),
+                                  luaL_tolstring(L, -2, NULL));
+    }
+    int viewer = lua_isnil(L, -1) || lua_toboolean(L, -1);
+    if ((st = fl_cli_check_input(mesh, "mesh")) >= 0) return st;
+    if (ref && (st = fl_cli_check_input(ref, "mesh")) >= 0) return st;
+    if (html && (st = fl_cli_check_output(html, "html")) >= 0) return st;
 
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
     int module = lua_gettop(L);

@@ -544,9 +544,13 @@ static int parse_sweep(sweep *s) {
             } else if (strcmp(a, "--collect") == 0) {
                 s->collect = 1;
             } else {
+                static const char *const names[] = {"--grid",  "--jobs",       "--out",
+                                                    "--point", "--allow",      "--no-sandbox",
+                                                    "--emit-jobs", "--collect", NULL};
                 const char *eq = strchr(a, '=');
-                return fl_cli_usage_error("sweep: unknown option '%.*s'",
-                                          (int)(eq ? (size_t)(eq - a) : strlen(a)), a);
+                return fl_cli_unknown("option", a, eq ? (size_t)(eq - a) : strlen(a), names,
+                                      "--grid, --jobs, --out, --point, --allow, --no-sandbox, "
+                                      "--emit-jobs, --collect");
             }
             if (st >= 0) return st;
             continue;

@@ -34,12 +34,15 @@ do
   T.eq(code, 0, "--help exit")
   T.eq(err, "", "--help: nothing on stderr")
   for _, want in ipairs { "^usage: femlod %[options%] COMMAND", "\n  run RECIPE%.lua ", "\n  info MESH ",
-    "\n  convert IN OUT ", "\n  simplify IN OUT ", "%-%-target N | %-%-ratio R", "%-%-min%-stretch X",
-    "%-%-max%-normal%-change DEG", "%-%-keep%-boundary", "%-%-lock I,J,K", "%-%-fast%-above F", "%-%-threads N", "%-%-hierarchy PART%.flh",
-    "\n  lod PART%.flh OUT %-%-size T | %-%-target N\n", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-q, %-%-quiet ", "\n  %-v, %-%-verbose ", "\n  %-%-traceback ",
+    "\n  convert IN OUT ", "\n  simplify IN OUT ", "\n  repair IN OUT ", "\n  report MESH ", "\n  sweep RECIPE%.lua ",
+    "\n  lod PART%.flh OUT ", "\n  help %[COMMAND%] ", "\n  %-e CODE ", "\n  %-%-seed N ", "\n  %-q, %-%-quiet ",
+    "\n  %-v, %-%-verbose ", "\n  %-%-traceback ", "femlod help COMMAND, or femlod COMMAND %-%-help",
+    "\nFMT, read%+write: obj stl stl_ascii stl_binary off ply ply_ascii ply_binary gltf\n%s+glb msh msh2 medit\n"
+    .. "     write only: vtk inp\n",
     "Exit status: 0 success, 1 error, 2 usage error, 3 a limit was exceeded" } do
     T.check(out:find(want), "--help mentions " .. want)
   end
+
   T.eq(select(2, run("-h")), out, "-h is --help")
   T.eq(select(2, run("help")), out, "help command")
 end
@@ -55,9 +58,14 @@ local function usage(expect_first_line, ...)
   T.check(err:find("\nusage: femlod ") ~= nil, "usage line for: " .. args)
 end
 usage("femlod: no command given")
-usage("femlod: unknown option '--bogus'", "--bogus")
-usage("femlod: unknown option '--bogus'", "--quiet", "--bogus", "run", "x.lua")
-usage("femlod: unknown command 'frobnicate'", "frobnicate")
+usage("femlod: unknown option '--bogus' (the options of a command follow it: femlod help COMMAND)", "--bogus")
+usage("femlod: unknown option '--bogus' (the options of a command follow it: femlod help COMMAND)", "--quiet",
+  "--bogus", "run", "x.lua")
+usage("femlod: unknown option '--verbos'; did you mean --verbose?", "--verbos", "info", "x.obj")
+usage("femlod: unknown command 'frobnicate' (valid: run, -e, info, convert, repair, simplify, lod, sweep, report, "
+  .. "help)", "frobnicate")
+usage("femlod: unknown command 'simplfy'; did you mean simplify?", "simplfy", "a.obj", "b.obj")
+usage("femlod: unknown command 'conver'; did you mean convert?", "help", "conver")
 usage("femlod: missing a recipe", "run")
 usage("femlod: missing a line of Lua", "-e")
 usage("femlod: missing a mesh file", "info")
@@ -72,7 +80,9 @@ usage("femlod: unknown parameter 'bogus' (valid: format, reference, report)", "i
 usage("femlod: report: unknown report 'xml' (valid: text, row, fields)", "info", "x.obj", "report=xml")
 usage("femlod: format: unknown format 'xyz' (valid: obj, stl, stl_ascii, stl_binary, off, ply, ply_ascii, ply_binary, gltf, glb, msh, msh2, vtk, inp, medit)",
   "convert", "a.obj", "b.obj", "format=xyz")
-usage("femlod: unknown parameter 'formt' (valid: format, input_format, color_by, normals)", "convert", "a.obj", "b.obj", "formt=obj")
+usage("femlod: unknown parameter 'formt'; did you mean format?", "convert", "a.obj", "b.obj", "formt=obj")
+usage("femlod: unknown parameter 'zzz' (valid: format, input_format, color_by, normals)", "convert", "a.obj",
+  "b.obj", "zzz=obj")
 -- Options come first: after the command they are operands or pairs.
 usage("femlod: expected name=value, got '--quiet'", "-e", "", "--quiet")
 -- }======
@@ -118,7 +128,7 @@ do
   T.check(err:find("^femlod: " .. p:gsub("%p", "%%%0") .. ":1: unexpected symbol near '='\n$"), "syntax error: " .. err)
   code, out, err = run("run", path("no_such_recipe.lua"))
   T.eq(code, 1, "missing recipe exit 1")
-  T.check(err:find("^femlod: cannot open " .. path("no_such_recipe.lua"):gsub("%p", "%%%0")), "missing recipe: " .. err)
+  T.eq(err, "femlod: " .. path("no_such_recipe.lua") .. ": cannot open: No such file or directory\n", "missing recipe")
   p = path("bytecode.lua")
   T.writefile(p, string.dump(function() print("ran") end))
   code, out, err = run("run", p)
@@ -322,7 +332,9 @@ do
   T.eq(run("convert", bad, out_file), 1, "failed convert over an existing file")
   T.eq(T.readfile(out_file), "keep me", "existing output untouched")
   code, out, err = run("convert", fandisk, P.tmp .. "/no_such_dir/x.stl")
-  T.eq(code, 1, "convert into a missing folder fails")
+  T.eq(code, 2, "convert into a missing folder: a usage error")
+  T.eq(err:match("^[^\n]*"), "femlod: " .. P.tmp .. "/no_such_dir/x.stl: folder " .. P.tmp .. "/no_such_dir does not exist",
+    "convert into a missing folder: message")
   T.check(not T.exists(P.tmp .. "/no_such_dir/x.stl"), "nothing written")
 end
 -- }======
@@ -358,8 +370,12 @@ do
   end
   usage_err("weld: a finite length >= 0 or false expected, got -1", "repair", spider, out, "weld=-1")
   usage_err("orient: true or false expected, got 'yes'", "repair", spider, out, "orient=yes")
-  usage_err("unknown parameter 'wled' (valid: weld, drop_degenerate, drop_duplicates, split_nonmanifold, "
-    .. "orient, drop_unused, format, input_format)", "repair", spider, out, "wled=1")
+  usage_err("unknown parameter 'wled'; did you mean weld?", "repair", spider, out, "wled=1")
+  usage_err("unknown parameter 'zzz' (valid: weld, drop_degenerate, drop_duplicates, split_nonmanifold, "
+    .. "orient, drop_unused, format, input_format)", "repair", spider, out, "zzz=1")
+  usage_err("--orient: true or false expected, got 'yes'", "repair", spider, out, "--orient=yes")
+  usage_err("--weld: a finite length >= 0 or false expected, got -1", "repair", spider, out, "--weld", "-1")
+  usage_err("unknown option '--wled'; did you mean --weld?", "repair", spider, out, "--wled", "1")
   usage_err("missing an input and an output file", "repair", spider)
   local before = T.readfile(out)
   code, text, err = run("repair", P.shared .. "/missing.stl", out)
@@ -463,8 +479,14 @@ do
     usage(first_line, "simplify", fandisk, never, ...)
     T.check(not T.exists(never), "no output after: " .. table.concat({ ... }, " "))
   end
-  simplify_usage("femlod: unknown option '--bogus'", "--bogus")
-  simplify_usage("femlod: unknown option '--quiet'", "--target", "10", "--quiet")
+  simplify_usage("femlod: unknown option '--bogus' (valid: --target, --ratio, --tolerance, --max-deviation, "
+    .. "--min-stretch, --max-size, --max-valence, --feature-angle, --feature-weight, --max-normal-change, "
+    .. "--keep-boundary, --area-weighted, --fast-above, --threads, --lock, --hierarchy, --hierarchy-floor)", "--bogus")
+  simplify_usage("femlod: --quiet is an option of femlod, not of simplify: put it before the command "
+    .. "(femlod --quiet simplify ...)", "--target", "10", "--quiet")
+  simplify_usage("femlod: unknown option '--targt'; did you mean --target?", "--targt", "10")
+  simplify_usage("femlod: unknown option '--min-strech'; did you mean --min-stretch?", "--min-strech=0.3")
+  simplify_usage("femlod: unknown parameter 'minstretch'; did you mean min_stretch?", "minstretch=0.3")
   simplify_usage("femlod: --target needs a value", "--target")
   simplify_usage("femlod: --target: number expected, got 'many'", "--target", "many")
   simplify_usage("femlod: --target: integer >= 1 expected, got 0", "--target", "0")
@@ -482,12 +504,14 @@ do
   simplify_usage("femlod: --lock: list of vertex indices (1, 2, ...) expected, got '0'", "--lock", "0")
   simplify_usage("femlod: --lock: vertex 6476 out of range (1..6475)", "--lock", "1,6476")
   simplify_usage("femlod: option given twice: 'target'", "--target", "100", "target=200")
-  simplify_usage("femlod: unknown parameter 'targt' (valid: target, ratio, tolerance, max_deviation, min_stretch, "
+  simplify_usage("femlod: unknown parameter 'targt'; did you mean target?", "targt=100")
+  simplify_usage("femlod: unknown parameter 'zzz' (valid: target, ratio, tolerance, max_deviation, min_stretch, "
     .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, fast_above, threads, lock, "
     .. "hierarchy, hierarchy_floor)",
-    "targt=100")
+    "zzz=100")
   simplify_usage("femlod: expected name=value, got '3000'", "--keep-boundary", "3000")
-  simplify_usage("femlod: --fast-above: number >= 1 or boolean expected, got 0.5", "--fast-above", "0.5")
+  simplify_usage("femlod: --fast-above: number >= 1 or off expected, got 0.5", "--fast-above", "0.5")
+  simplify_usage("femlod: fast_above: number >= 1 or off expected, got 0.5", "fast_above=0.5")
   usage("femlod: missing an input and an output file", "simplify", fandisk)
   usage("femlod: simplify: IN and OUT come first, then the options", "simplify", "--target", "100", fandisk, never)
 
@@ -505,7 +529,9 @@ do
   T.eq(run("simplify", fandisk, never, "--target", "0"), 2, "usage error over an existing file")
   T.eq(T.readfile(never), "keep me", "existing output untouched by a usage error")
   code, text, err = run("simplify", fandisk, P.tmp .. "/no_such_dir/x.obj", "--target", "6000")
-  T.eq(code, 1, "simplify into a missing folder fails")
+  T.eq(code, 2, "simplify into a missing folder: a usage error")
+  T.eq(err:match("^[^\n]*"), "femlod: " .. P.tmp .. "/no_such_dir/x.obj: folder " .. P.tmp .. "/no_such_dir does not exist",
+    "simplify into a missing folder: message")
   T.eq(text, "", "no report when OUT cannot be written")
   T.check(not T.exists(P.tmp .. "/no_such_dir/x.obj"), "nothing written")
 end
@@ -605,8 +631,9 @@ do
   lod_usage("femlod: --size: number >= 0 or inf expected, got 'fine'", "--size", "fine")
   lod_usage("femlod: --size: number >= 0 or inf expected, got '-1'", "--size", "-1")
   lod_usage("femlod: size: number >= 0 or inf expected, got ''", "size=")
-  lod_usage("femlod: unknown option '--targt' (valid: --size, --target)", "--targt", "100")
-  lod_usage("femlod: unknown parameter 'targt' (valid: size, target)", "targt=100")
+  lod_usage("femlod: unknown option '--targt'; did you mean --target?", "--targt", "100")
+  lod_usage("femlod: unknown parameter 'targt'; did you mean target?", "targt=100")
+  lod_usage("femlod: unknown option '--zzz' (valid: --size, --target)", "--zzz", "100")
   lod_usage("femlod: --target: a triangle count >= 1 expected, got '0'", "--target", "0")
   lod_usage("femlod: target: a triangle count >= 1 expected, got '1.5'", "target=1.5")
   lod_usage("femlod: give one of --size and --target, not both ('target')", "--size", "1", "--target", "100")
@@ -636,7 +663,9 @@ do
   T.eq(text, "", "no report after a failure")
   T.check(not T.exists(never), "no output after the failures")
   code, text, err = run("simplify", fandisk, never, "--target", "2000", "--hierarchy", P.tmp .. "/no_such_dir/x.flh")
-  T.eq(code, 1, "simplify --hierarchy into a missing folder fails")
+  T.eq(code, 2, "simplify --hierarchy into a missing folder: a usage error")
+  T.eq(err:match("^[^\n]*"), "femlod: " .. P.tmp .. "/no_such_dir/x.flh: folder " .. P.tmp .. "/no_such_dir does not exist",
+    "simplify --hierarchy into a missing folder: message")
   T.check(not T.exists(never), "OUT is written after the hierarchy: not written when the hierarchy fails")
 
   -- The example recipe.
@@ -786,6 +815,123 @@ do
   os.remove(path("verbose_lod.obj"))
   os.remove(path("verbose.off"))
   os.remove(path("verbose_rep.obj"))
+end
+-- }======
+
+-- {====== checked before any work: outputs, inputs, values (exit 2, stdout
+-- empty, nothing written, the problem named in femlod's words)
+do
+  local function first(...)
+    local code, out, err = run(...)
+    return code, out, err:match("^[^\n]*"), err
+  end
+  local function usage2(expected, ...)
+    local code, out, line, err = first(...)
+    local args = table.concat({ ... }, " ")
+    T.eq(code, 2, "exit 2 for: " .. args)
+    T.eq(out, "", "stdout empty for: " .. args)
+    T.eq(line, expected, "message for: " .. args)
+    return err
+  end
+  local cover = P.examples .. "/data/cover.obj"
+  local dir = path("checks")
+  os.execute("rm -rf " .. quote(dir) .. " && mkdir -p " .. quote(dir .. "/sub"))
+  local xyz = dir .. "/o.xyz"
+  usage2("femlod: " .. xyz .. ": unknown file extension (valid: .obj, .stl, .off, .ply, .gltf, .glb, .msh, .vtk, "
+    .. ".inp, .mesh; or give format=FMT)", "simplify", cover, xyz, "--target", "3000")
+  T.check(not T.exists(xyz), "o.xyz not written")
+  usage2("femlod: nodir/o.obj: folder nodir does not exist", "simplify", cover, "nodir/o.obj", "--target", "3000")
+  usage2("femlod: nodir/p.flh: folder nodir does not exist", "simplify", cover, dir .. "/o.obj", "--target", "3000",
+    "--hierarchy", "nodir/p.flh")
+  T.check(not T.exists(dir .. "/o.obj"), "OUT not written when --hierarchy's folder is missing")
+  usage2("femlod: " .. dir .. "/sub: is a folder; give a file name", "convert", fandisk, dir .. "/sub")
+  usage2("femlod: " .. dir .. "/sub/: is a folder; give a file name", "lod", "x.flh", dir .. "/sub/", "--size", "1")
+  usage2("femlod: " .. fandisk .. "/x.obj: " .. fandisk .. " is not a folder", "repair", fandisk, fandisk .. "/x.obj")
+  usage2("femlod: " .. xyz .. ": unknown file extension (valid: .obj, .stl, .off, .ply, .gltf, .glb, .msh, .vtk, "
+    .. ".inp, .mesh; or give format=FMT)", "lod", "x.flh", xyz, "--size", "1")
+  T.eq(run("-q", "convert", fandisk, xyz, "format=obj"), 0, "format= stands for the extension")
+  local err = usage2("femlod: nodir/o.obj: folder nodir does not exist", "convert", fandisk, "nodir/o.obj")
+  T.eq(err:match("\n([^\n]*)\n$"), "usage: femlod convert IN OUT [options] (try 'femlod help convert')",
+    "the usage line is the command's")
+
+  -- Bad values: the option, the value and the valid values; exit 2.
+  local glb = dir .. "/x.glb"
+  usage2("femlod: color_by: unknown measure 'stress' (valid: stretch, size, valence, none)", "convert", fandisk, glb,
+    "color_by=stress")
+  usage2("femlod: --color-by: unknown measure 'strech'; did you mean stretch? (valid: stretch, size, valence, none)",
+    "convert", fandisk, glb, "--color-by", "strech")
+  usage2("femlod: normals: true or false expected, got 'yes'", "convert", fandisk, glb, "normals=yes")
+  usage2("femlod: --normals: true or false expected, got 'yes'", "convert", fandisk, glb, "--normals=yes")
+  usage2("femlod: " .. dir .. "/x.obj: color_by and normals are glTF options; " .. dir .. "/x.obj is obj, not gltf or glb",
+    "convert", fandisk, dir .. "/x.obj", "--color-by", "stretch")
+  usage2("femlod: --format: unknown format 'stll'; did you mean stl? (valid: obj, stl, stl_ascii, stl_binary, off, "
+    .. "ply, ply_ascii, ply_binary, gltf, glb, msh, msh2, vtk, inp, medit)", "convert", fandisk, glb, "--format", "stll")
+  usage2("femlod: --report: unknown report 'rows' (valid: text, row, fields)", "info", fandisk, "--report", "rows")
+  T.check(not T.exists(glb), "nothing written by the usage errors")
+
+  -- One option style: --name VALUE, --name=VALUE and name=VALUE everywhere.
+  local code, out = run("convert", fandisk, glb, "--color-by", "stretch", "--normals")
+  T.eq(code, 0, "convert --color-by stretch --normals")
+  T.eq(out, glb .. ": 12946 triangles, 6475 vertices (glb)\n", "convert --color-by: summary")
+  local g = femlod.load(glb)
+  T.eq(g:counts().triangles, 12946, "the glb reads back")
+  T.eq(run("-q", "convert", fandisk, glb, "--color-by=size", "--no-normals"), 0, "--color-by=size --no-normals")
+  T.eq(run("-q", "convert", fandisk, glb, "--normals", "false"), 0, "--normals false")
+  local _, by_pair = run("info", fandisk, "reference=" .. fandisk, "report=row")
+  local code2, by_flag = run("info", fandisk, "--reference", fandisk, "--report", "row")
+  T.eq(code2, 0, "info --reference")
+  T.eq(by_flag, by_pair, "info --reference R --report row is reference=R report=row")
+  T.eq(select(2, run("info", fandisk, "--reference=" .. fandisk, "--report=row")), by_pair, "info --reference=R")
+  T.eq(select(2, run("info", fandisk, "--format", "obj")), select(2, run("info", fandisk)), "info --format obj")
+  usage2("femlod: option given twice: '--report'", "info", fandisk, "report=row", "--report", "text")
+  usage2("femlod: --report needs a value", "info", fandisk, "--report")
+  usage2("femlod: -q is an option of femlod, not of info: put it before the command (femlod -q info ...)", "info",
+    fandisk, "-q")
+  usage2("femlod: --quiet is an option of femlod, not of run: put it before the command (femlod --quiet run ...)",
+    "run", "--quiet", "x.lua")
+  local fixed = dir .. "/fixed.obj"
+  local _, a = run("repair", P.shared .. "/spider_binary.stl", fixed, "orient=false", "weld=false")
+  local _, b = run("repair", P.shared .. "/spider_binary.stl", fixed, "--orient", "false", "--weld=false")
+  T.eq(b, a, "repair --orient false --weld=false is orient=false weld=false")
+  local _, r1 = run("report", fandisk, "--reference", fandisk)
+  local code3, r2 = run("report", fandisk, "reference=" .. fandisk)
+  T.eq(code3, 0, "report reference=R")
+  T.eq(r2, r1, "report reference=R is --reference R")
+  usage2("femlod: unknown option '--refrence'; did you mean --reference?", "report", fandisk, "--refrence", fandisk)
+  usage2("femlod: unknown option '--jbos'; did you mean --jobs?", "sweep", "x.lua", "--jbos", "2")
+
+  -- Inputs that are not what the command reads.
+  usage2("femlod: " .. dir .. ": is a folder, not a mesh file", "info", dir)
+  usage2("femlod: " .. dir .. ": is a folder, not a mesh file", "simplify", dir, dir .. "/o.obj", "--target", "10")
+  usage2("femlod: " .. dir .. ": is a folder, not a hierarchy file", "lod", dir, dir .. "/o.obj", "--size", "1")
+  usage2("femlod: " .. dir .. ": is a folder, not a recipe file", "run", dir)
+  usage2("femlod: part.flh: a saved vertex hierarchy, not a mesh; 'femlod lod part.flh OUT --size T' writes a mesh "
+    .. "from it", "info", "part.flh")
+
+  -- A target the input already meets: said, not hidden in "0 collapses".
+  local code4, text, err4 = run("simplify", fandisk, dir .. "/same.obj", "--target", "20000")
+  T.eq(code4, 0, "a target above the input's count is no error")
+  T.eq(err4, "femlod: --target 20000 is not below fandisk.obj's 12946 triangles: nothing to simplify\n",
+    "a target above the input's count: message")
+  T.check(text:find("\nstop: target; 0 collapses"), "and the report says so too: " .. text)
+  code4, text, err4 = run("simplify", fandisk, dir .. "/same.obj", "ratio=1")
+  T.eq(err4, "femlod: ratio 1 keeps all of fandisk.obj's 12946 triangles: nothing to simplify\n", "ratio=1: message")
+  code4, text, err4 = run("-q", "simplify", fandisk, dir .. "/same.obj", "--target", "20000")
+  T.eq(err4, "", "-q: no message")
+
+  -- Files without triangles: an error that says so, not a report of zeros.
+  local empty_ascii, empty_binary = dir .. "/empty.stl", dir .. "/empty_binary.stl"
+  T.writefile(empty_ascii, "solid x\nendsolid x\n")
+  T.writefile(empty_binary, ("\0"):rep(84))
+  for _, args in ipairs { { "info", empty_ascii }, { "info", empty_binary }, { "report", empty_ascii },
+    { "simplify", empty_binary, dir .. "/e.obj", "--target", "10" }, { "convert", empty_ascii, dir .. "/e.obj" } } do
+    local c, o, e = run(table.unpack(args))
+    T.eq(c, 1, table.concat(args, " ") .. ": exit 1")
+    T.eq(o, "", table.concat(args, " ") .. ": no report")
+    T.eq(e, "femlod: " .. args[2] .. ": no triangles\n", table.concat(args, " ") .. ": message")
+  end
+  T.check(not T.exists(dir .. "/e.obj"), "nothing written for an empty input")
+  os.execute("rm -rf " .. quote(dir))
 end
 -- }======
 

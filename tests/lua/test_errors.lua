@@ -333,7 +333,9 @@ end
   -- Runs every writer into dir (made by setup, undone by teardown); each must
   -- fail with "FILE: " .. expected, leave dir's listing and old files as
   -- they were.
-  local function case(name, dir, expected, prefix, setup, teardown)
+  -- cli: the program's own check of the output before any work (exit 2),
+  -- when the case is one it can see: the first line it prints, %s the folder.
+  local function case(name, dir, expected, prefix, setup, teardown, cli)
     if setup ~= "missing" then os.execute("mkdir -p " .. quote(dir)) end
     local old = {}
     if setup ~= "missing" then
@@ -362,9 +364,13 @@ end
     T.eq(seen, #WRITERS, name .. ": every writer tried")
     for _, w in ipairs(cli_writes(dir)) do
       local c, o, e = spawn(LOST, prefix, table.unpack(w[2]))
-      T.eq(c, 1, name .. ": " .. w[1] .. " exit 1")
+      T.eq(c, cli and 2 or 1, name .. ": " .. w[1] .. " exit status")
       T.eq(o, "", name .. ": " .. w[1] .. " prints no report")
-      T.eq(e, "femlod: " .. w[3] .. ": " .. expected .. "\n", name .. ": " .. w[1] .. " message")
+      if cli then
+        T.eq(e:match("^[^\n]*"), "femlod: " .. w[3] .. ": " .. cli:format(dir), name .. ": " .. w[1] .. " message")
+      else
+        T.eq(e, "femlod: " .. w[3] .. ": " .. expected .. "\n", name .. ": " .. w[1] .. " message")
+      end
     end
     if teardown then teardown(dir) end
     T.eq(listing(dir), before, name .. ": no file made or removed, no temporary left")
@@ -381,14 +387,15 @@ end
   case("read-only folder", LOST .. "/rodir", "cannot create temporary file: Permission denied",
     root and "setpriv --bounding-set=-dac_override,-dac_read_search" or nil,
     function(dir) os.execute("chmod 555 " .. quote(dir)) end,
-    function(dir) os.execute("chmod 755 " .. quote(dir)) end)
+    function(dir) os.execute("chmod 755 " .. quote(dir)) end, "cannot write in folder %s: Permission denied")
   -- Existing read-only files: refused even as root, whose rename would work.
   case("read-only files", LOST .. "/rofiles", "cannot write: file is read-only (mode 0444)", nil,
     function(dir) os.execute("chmod 444 " .. quote(dir) .. "/*") end,
-    function(dir) os.execute("chmod 644 " .. quote(dir) .. "/*") end)
-  case("targets are folders", LOST .. "/folders", "cannot write: Is a directory", nil, "folders")
+    function(dir) os.execute("chmod 644 " .. quote(dir) .. "/*") end, "cannot write: file is read-only (mode 0444)")
+  case("targets are folders", LOST .. "/folders", "cannot write: Is a directory", nil, "folders", nil,
+    "is a folder; give a file name")
   case("missing folder", LOST .. "/missing/sub", "cannot create temporary file: No such file or directory",
-    nil, "missing")
+    nil, "missing", nil, "folder %s does not exist")
   T.check(not T.exists(LOST .. "/missing/sub/."), "the missing folder was not made")
 end
 -- }======

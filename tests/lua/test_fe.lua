@@ -106,7 +106,7 @@ T.eq(out, path("cli.vtk") .. ": 12946 triangles, 6475 vertices (vtk)\n", "conver
 T.check(T.readfile(path("cli.vtk")):find("\nCELLS 12946 51784\n", 1, true), "vtk CELLS line")
 code, out = run("convert", path("cli.msh"), path("cli.x"), "format=msh3")
 T.eq(code, 2, "an unknown format is a usage error (exit 2)")
-T.check(out:find("unknown format 'msh3' (valid: obj, stl, stl_ascii, stl_binary, off, ply, " ..
+T.check(out:find("unknown format 'msh3'; did you mean msh? (valid: obj, stl, stl_ascii, stl_binary, off, ply, " ..
   "ply_ascii, ply_binary, gltf, glb, msh, msh2, vtk, inp, medit)", 1, true), "lists the formats")
 -- }======
 

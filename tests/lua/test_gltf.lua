@@ -143,8 +143,9 @@ do
   local json = glb_json(out)
   T.check(json:find('"_SIZE":', 1, true) and json:find('"NORMAL":', 1, true), "convert passes color_by and normals")
   code, text, err = run("convert", P.shared .. "/fandisk.obj", path("c.obj"), "normals=true")
-  T.eq(code, 1, "glTF option for OBJ: exit 1")
-  T.check(err:find("color_by, normals and extras are glTF options (format obj)", 1, true), "convert error: " .. err)
+  T.eq(code, 2, "glTF option for OBJ: a usage error")
+  T.eq(err:match("^[^\n]*"), "femlod: " .. path("c.obj") .. ": color_by and normals are glTF options; " .. path("c.obj")
+    .. " is obj, not gltf or glb", "convert error")
   code, text, err = run("convert", P.shared .. "/fandisk.obj", out, "format=gltf2")
   T.eq(code, 2, "unknown format: usage error")
   T.check(err:find("valid: obj, stl, stl_ascii, stl_binary, off, ply, ply_ascii, ply_binary, gltf, glb", 1, true),

@@ -508,8 +508,7 @@ do
   usage("femlod: report: MESH comes first, then the options", "report", "--html", "x.html")
   usage("femlod: --html needs a value", "report", small, "--html")
   usage("femlod: option given twice: '--html'", "report", small, "--html", "a.html", "--html=b.html")
-  usage("femlod: report: unknown option '--htm' (valid: --reference, --html, --no-viewer)", "report", small,
-    "--htm=x")
+  usage("femlod: unknown option '--htm'; did you mean --html?", "report", small, "--htm=x")
   usage("femlod: --reference: file name expected, got ''", "report", small, "--reference=")
   code, out, err = run("report", P.tmp .. "/missing.obj")
   T.eq(code, 1, "missing mesh: exit 1")

@@ -369,7 +369,8 @@ usage("femlod: --max-memory: size of at least 64K expected (a number with K, M o
 usage("femlod: --max-time: number of seconds > 0 expected, got '-1'", "run", "--max-time", "-1", "x.lua")
 usage("femlod: --max-time: number of seconds > 0 expected, got 'soon'", "--max-time", "soon", "-e", "")
 usage("femlod: --sandbox applies to run and -e only", "--sandbox", "info", "recipes/part.obj")
-usage("femlod: unknown option '--sandbx'", "run", "--sandbx", "x.lua")
+usage("femlod: unknown option '--sandbx'; did you mean --sandbox?", "run", "--sandbx", "x.lua")
+usage("femlod: unknown option '--zzz' (valid: --sandbox, --allow, --max-memory, --max-time)", "run", "--zzz", "x.lua")
 -- }======
 
 -- {====== femlod's own writers work inside: write_file, a report page with its viewer

@@ -298,7 +298,7 @@ usage("femlod: --grid: '2x' is not a name (letters, digits, _)", "sweep", COPY, 
 usage("femlod: out_dir is set by the sweep (DIR/points/NNN)", "sweep", COPY, "out_dir=/tmp")
 usage("femlod: --jobs: integer 1..256 expected, got '0'", "sweep", COPY, "--jobs", "0")
 usage("femlod: --jobs needs a value", "sweep", COPY, "--jobs")
-usage("femlod: sweep: unknown option '--grids'", "sweep", COPY, "--grids=a=1")
+usage("femlod: unknown option '--grids'; did you mean --grid?", "sweep", COPY, "--grids=a=1")
 usage("femlod: --point 6: the grid has points 0..5", "sweep", COPY, "--grid", "a=1,2,3", "--grid", "b=x,y",
   "--point", "6")
 usage("femlod: sweep: --emit-jobs, --collect and --point exclude each other", "sweep", COPY, "--collect",
