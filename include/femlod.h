@@ -734,8 +734,9 @@ typedef enum femlod_lod_limit {
 femlod_lod_limit femlod_hierarchy_last_limit(const femlod_hierarchy *h);
 /* A short reason, for messages: "tolerance" (the check that refused most
  * edges when the simplification could go no further, when known), "the
- * thresholds allow no coarser mesh", "the input's count", "dependencies";
- * "" for FEMLOD_LIMIT_NONE. */
+ * hierarchy goes no coarser (hierarchy_floor)" (stopped at a floor, or a
+ * file that does not say), "the input's count", "dependencies"; "" for
+ * FEMLOD_LIMIT_NONE. */
 const char *femlod_hierarchy_limit_reason(const femlod_hierarchy *h);
 /* The check (a femlod_reject) that refused most edges when the
  * simplification stopped going coarser; FEMLOD_REJECT_COUNT when unknown

@@ -504,7 +504,7 @@ const char *femlod_hierarchy_limit_reason(const femlod_hierarchy *h) {
     case FEMLOD_LIMIT_COARSEST:
         return h->binding >= 0 && h->binding < FEMLOD_REJECT_COUNT
                    ? femlod_reject_name((femlod_reject)h->binding)
-                   : "the thresholds allow no coarser mesh";
+                   : "the hierarchy goes no coarser (hierarchy_floor)";
     case FEMLOD_LIMIT_FINEST: return "the input's count";
     case FEMLOD_LIMIT_DEPENDENCIES: return "dependencies";
     }

@@ -256,7 +256,10 @@ static int finish(simp *S, const femlod_simplify_options *o, size_t live0, size_
             *why = FEMLOD_STOP_CANCELLED;
             return 2;
         }
-        if (!queued) break;
+        /* nothing newly queued and nothing left in the queue: no valid
+         * edge (past the target the queue still holds the edges that were
+         * valid when the target was reached) */
+        if (!queued && fl_heap_size(&S->heap) == 0) break;
         if (S->oom) return 0;
 #if FEMLOD_SIMPLIFY_STATS
         double tq1 = now_seconds();

@@ -107,7 +107,10 @@ local input_set = triangle_set(fandisk)
 local input_pos = fandisk:positions()
 
 local t0 = os.clock()
-local h = fandisk:simplify { target = 2000 }
+-- hierarchy_floor = false: this hierarchy stops at the target, so that
+-- coarsen(math.huge) gives the simplification result (the hierarchy below
+-- the target has its own section)
+local h = fandisk:simplify { target = 2000, hierarchy_floor = false }
 local simplify_seconds = os.clock() - t0
 local S = h:stats()
 local coarse = h:mesh()          -- the simplification result
@@ -880,7 +883,7 @@ end
 
 -- {====== refine_region: region LOD (paper 5.3.1b)
 do
-  local h <close> = fandisk:simplify { target = 1500 }
+  local h <close> = fandisk:simplify { target = 1500, hierarchy_floor = false }
   local base = h:counts().triangles
   local c = fandisk:positions()[1]
   local function inside_nodes(test)

@@ -209,11 +209,11 @@ do
   -- The default size bound is 0.1 x the bounding-box diagonal (include/femlod.h).
   T.near(s.thresholds.max_size, 0.1 * sqrt(0.9206 ^ 2 + 0.5111 ^ 2 + 1), 1e-4, "default max_size")
 
-  T.eq(A:collapses(), s.collapses, "h:collapses()")
+  T.check(A:collapses() >= s.collapses, "h:collapses(): those to the target and those past it")
   T.eq(A:input_vertices(), 6475, "h:input_vertices()")
   T.eq(math.type(A:log_bytes()), "integer", "h:log_bytes() is an integer")
   T.check(A:log_bytes() > 16 * s.collapses, "the log holds every collapse: " .. A:log_bytes())
-  T.eq(tostring(A), string.format("femlod.Hierarchy (%d nodes, 3000 triangles on the front)", 6475 + s.collapses),
+  T.eq(tostring(A), string.format("femlod.Hierarchy (%d nodes, 3000 triangles on the front)", 6475 + A:collapses()),
     "tostring")
   T.eq(getmetatable(A).__name, "femlod.Hierarchy", "metatable name")
   -- Each call gives a new table and a new mesh.
