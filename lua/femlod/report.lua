@@ -98,7 +98,9 @@ local function histogram_lines(h, out)
   end
 end
 
-function M.text(q, name)
+-- max_deviation (optional): the bound the mesh was made with; a measured
+-- deviation above it is flagged.
+function M.text(q, name, max_deviation)
   q = quality_of(q, "text")
   check_string(name, 2, "text")
   local out = {}
@@ -126,6 +128,10 @@ function M.text(q, name)
   if q.hausdorff then
     line("hausdorff", "%s (%s of the reference's diagonal; forward %s, backward %s)",
       num(q.hausdorff), num(q.hausdorff_rel), num(q.hausdorff_forward), num(q.hausdorff_backward))
+    if type(max_deviation) == "number" then
+      line("deviation", q.hausdorff > max_deviation and "EXCEEDS max_deviation %s (%.3g times it)"
+        or "within max_deviation %s (%.3g of it)", num(max_deviation), q.hausdorff / max_deviation)
+    end
   end
   out[#out + 1] = "  stretch histogram:"
   histogram_lines(q.histogram, out)
@@ -489,7 +495,7 @@ local function valence_bars(nb)
 end
 
 local REPORT_KEYS = { reference = true, html = true, name = true, reference_name = true, viewer = true,
-  title = true, progress = true }
+  title = true, progress = true, max_deviation = true }
 
 local function check_opts(opts)
   if opts == nil then return {} end
@@ -498,8 +504,8 @@ local function check_opts(opts)
   end
   for k in pairs(opts) do
     if not REPORT_KEYS[k] then
-      error(format("bad argument #2 to 'report' (unknown option '%s'; valid: html, name, progress, "
-        .. "reference, reference_name, title, viewer)", tostring(k)), 3)
+      error(format("bad argument #2 to 'report' (unknown option '%s'; valid: html, max_deviation, name, "
+        .. "progress, reference, reference_name, title, viewer)", tostring(k)), 3)
     end
   end
   for _, k in ipairs { "html", "name", "reference_name", "title" } do
@@ -509,6 +515,10 @@ local function check_opts(opts)
   end
   if opts.viewer ~= nil and opts.viewer ~= false and type(opts.viewer) ~= "string" then
     error(format("bad argument #2 to 'report' (viewer: path or false expected, got %s)", type(opts.viewer)), 3)
+  end
+  if opts.max_deviation ~= nil and not (type(opts.max_deviation) == "number" and opts.max_deviation > 0) then
+    error(format("bad argument #2 to 'report' (max_deviation: positive number expected, got %s)",
+      tostring(opts.max_deviation)), 3)
   end
   if opts.progress ~= nil and type(opts.progress) ~= "function" then
     error(format("bad argument #2 to 'report' (progress: function expected, got %s)", type(opts.progress)), 3)
@@ -596,7 +606,8 @@ function M.report(mesh, opts)
     name = name, quality = q, reference_quality = rq,
     row = M.row(q, name, ref and "result" or nil),
     reference_row = rq and M.row(rq, ref_name, "reference") or nil,
-    text = M.text(q, name),
+    text = M.text(q, name, opts.max_deviation),
+    deviation_exceeded = q.hausdorff ~= nil and opts.max_deviation ~= nil and q.hausdorff > opts.max_deviation,
     histograms = { stretch = q.histogram, size = zcounts, size_max = q.size_max, valence = vlist },
     hausdorff = q.hausdorff, hausdorff_rel = q.hausdorff_rel,
     viewer = false,
@@ -613,6 +624,10 @@ function M.report(mesh, opts)
     parts[#parts + 1] = format('<p id="deviation">Hausdorff deviation from the reference: <b>%s</b> '
       .. '(%s of the reference\'s bounding-box diagonal; forward %s, backward %s)</p>', num(q.hausdorff),
       num(q.hausdorff_rel), num(q.hausdorff_forward), num(q.hausdorff_backward))
+    if summary.deviation_exceeded then
+      parts[#parts + 1] = format('<p id="deviation-exceeded"><b>The deviation exceeds max_deviation %s.</b></p>',
+        num(opts.max_deviation))
+    end
   end
   parts[#parts + 1] = "<h2>Distributions</h2>"
   parts[#parts + 1] = '<div class="charts">'

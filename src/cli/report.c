@@ -1,6 +1,6 @@
 /*
  * report.c - `femlod report MESH [--reference ORIGINAL] [--html OUT.html]
- * [--no-viewer]`: femlod.report from the command line. Prints the quality
+ * [--no-viewer] [--max-deviation X]`: femlod.report from the command line. Prints the quality
  * report (with the deviation when there is a reference) and the Table 1 rows;
  * writes the HTML page when asked.
  */
@@ -11,6 +11,7 @@
 #include "lua/lfemlod.h"
 
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include <lauxlib.h>
@@ -35,7 +36,7 @@ static int is_opt(const char *a, const char *opt) {
 }
 
 int fl_report_main(lua_State *L, const fl_sweep_cli *c) {
-    const char *mesh = c->argv[c->operand], *ref = NULL, *html = NULL;
+    const char *mesh = c->argv[c->operand], *ref = NULL, *html = NULL, *maxdev = NULL;
     int viewer = 1;
     if (strncmp(mesh, "--", 2) == 0) return fl_cli_usage_error("report: MESH comes first, then the options");
     for (int i = c->operand + 1; i < c->argc; i++) {
@@ -48,12 +49,15 @@ int fl_report_main(lua_State *L, const fl_sweep_cli *c) {
         } else if (is_opt(a, "--html")) {
             slot = &html;
             opt = "--html";
+        } else if (is_opt(a, "--max-deviation")) {
+            slot = &maxdev;
+            opt = "--max-deviation";
         } else if (strcmp(a, "--no-viewer") == 0) {
             viewer = 0;
             continue;
         } else {
             const char *eq = strchr(a, '=');
-            return fl_cli_usage_error("report: unknown option '%.*s' (valid: --reference, --html, --no-viewer)",
+            return fl_cli_usage_error("report: unknown option '%.*s' (valid: --reference, --html, --no-viewer, --max-deviation)",
                                       (int)(eq && strncmp(a, "--", 2) == 0 ? (size_t)(eq - a) : strlen(a)), a);
         }
         if (*slot) return fl_cli_usage_error("option given twice: '%s'", opt);
@@ -78,6 +82,13 @@ int fl_report_main(lua_State *L, const fl_sweep_cli *c) {
     if (html) {
         lua_pushstring(L, html);
         lua_setfield(L, opts, "html");
+    }
+    if (maxdev) {
+        char *end;
+        double d = strtod(maxdev, &end);
+        if (*end || !(d > 0.0)) return fl_cli_usage_error("--max-deviation: positive number expected, got '%s'", maxdev);
+        lua_pushnumber(L, d);
+        lua_setfield(L, opts, "max_deviation");
     }
     if (!viewer) {
         lua_pushboolean(L, 0);
