@@ -420,9 +420,11 @@ typedef struct femlod_simplify_options {
      * (weighted) feature lines, length^2. Default: 4 * (mean input edge
      * length)^2 (docs/simplify.md says why). */
     double tolerance;
-    /* Length: no removed input vertex may end farther than this from the
-     * output surface (tracked per triangle, as PMP's decimation does).
-     * Default: off. */
+    /* Length: the two-sided distance bound between the output and the
+     * input surface, held at samples of both (every input vertex, edge and
+     * face sample within it of the output; every output vertex, edge and
+     * face sample within it of the input; docs/simplify.md). Default:
+     * off. */
     double max_deviation;
     /* tau_ST (C2): least stretch (sqrt(12) * inradius / longest edge, in
      * [0, 1]) of every created triangle. Default 0.2. */

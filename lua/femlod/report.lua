@@ -103,7 +103,9 @@ local function histogram_lines(h, out)
   end
 end
 
-function M.text(q, name)
+-- max_deviation (optional): the bound the mesh was made with; a measured
+-- deviation above it is flagged.
+function M.text(q, name, max_deviation)
   q = quality_of(q, "text")
   check_string(name, 2, "text")
   local out = {}
@@ -131,6 +133,10 @@ function M.text(q, name)
   if q.hausdorff then
     line("hausdorff", "%s (%s of the reference's diagonal; forward %s, backward %s)",
       num(q.hausdorff), num(q.hausdorff_rel), num(q.hausdorff_forward), num(q.hausdorff_backward))
+    if type(max_deviation) == "number" then
+      line("deviation", q.hausdorff > max_deviation and "EXCEEDS max_deviation %s (%.3g times it)"
+        or "within max_deviation %s (%.3g of it)", num(max_deviation), q.hausdorff / max_deviation)
+    end
   end
   out[#out + 1] = "  stretch histogram:"
   histogram_lines(q.histogram, out)
@@ -779,7 +785,7 @@ local function display_copy(mesh, cap)
 end
 
 local REPORT_KEYS = { reference = true, html = true, name = true, reference_name = true, viewer = true,
-  title = true, progress = true, min_stretch = true, display_triangles = true }
+  title = true, progress = true, min_stretch = true, display_triangles = true, max_deviation = true }
 
 local function check_opts(opts)
   if opts == nil then return {} end
@@ -789,7 +795,7 @@ local function check_opts(opts)
   for k in pairs(opts) do
     if not REPORT_KEYS[k] then
       error(format("bad argument #2 to 'report' (unknown option '%s'; valid: display_triangles, html, "
-        .. "min_stretch, name, progress, reference, reference_name, title, viewer)", tostring(k)), 3)
+        .. "max_deviation, min_stretch, name, progress, reference, reference_name, title, viewer)", tostring(k)), 3)
     end
   end
   for _, k in ipairs { "html", "name", "reference_name", "title" } do
@@ -804,6 +810,10 @@ local function check_opts(opts)
   if ms ~= nil and ms ~= false and not (type(ms) == "number" and ms >= 0 and ms <= 1) then
     error(format("bad argument #2 to 'report' (min_stretch: number in [0, 1] or false expected, got %s)",
       type(ms) == "number" and num(ms) or type(ms)), 3)
+  end
+  if opts.max_deviation ~= nil and not (type(opts.max_deviation) == "number" and opts.max_deviation > 0) then
+    error(format("bad argument #2 to 'report' (max_deviation: positive number expected, got %s)",
+      tostring(opts.max_deviation)), 3)
   end
   local dt = opts.display_triangles
   if dt ~= nil and dt ~= false and not (mtype(dt) == "integer" and dt >= 100) then
@@ -899,7 +909,8 @@ function M.report(mesh, opts)
     name = name, quality = q, reference_quality = rq,
     row = M.row(q, name, ref and "result" or nil),
     reference_row = rq and M.row(rq, ref_name, "reference") or nil,
-    text = M.text(q, name),
+    text = M.text(q, name, opts.max_deviation),
+    deviation_exceeded = q.hausdorff ~= nil and opts.max_deviation ~= nil and q.hausdorff > opts.max_deviation,
     histograms = { stretch = q.histogram, size = zcounts, size_edges = zedges, size_max = q.size_max,
       valence = vlist },
     min_stretch = threshold or nil, below_min_stretch = threshold and below or nil,
@@ -957,6 +968,10 @@ function M.report(mesh, opts)
     side[#side + 1] = format('<p id="deviation">Hausdorff deviation from the reference: <b>%s</b> '
       .. '(%s of the reference\'s bounding-box diagonal; forward %s, backward %s)</p>', num(q.hausdorff),
       num(q.hausdorff_rel), num(q.hausdorff_forward), num(q.hausdorff_backward))
+    if summary.deviation_exceeded then
+      parts[#parts + 1] = format('<p id="deviation-exceeded"><b>The deviation exceeds max_deviation %s.</b></p>',
+        num(opts.max_deviation))
+    end
   end
   if threshold then
     side[#side + 1] = format('<p id="below-threshold">%s below %s %s (least stretch %.3f)</p>',

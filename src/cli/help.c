@@ -165,6 +165,7 @@ static const page pages[] = {
      "  --reference ORIGINAL  also the deviation from ORIGINAL\n"
      "  --html OUT.html  write the page\n"
      "  --no-viewer      leave the 3D view out of the page\n"
+     "  --max-deviation D  with --reference: flag a deviation above D (length)\n"
      "\n"
      "Examples:\n"
      "  femlod report cover-3k.obj --reference cover.obj --html cover-3k.html\n"},

@@ -10,6 +10,7 @@
 
 #include "lua/lfemlod.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -24,7 +25,8 @@ int fl_report_main(lua_State *L, const fl_sweep_cli *c) {
     const char *mesh = c->argv[c->operand], *ref = NULL, *html = NULL;
     if (strncmp(mesh, "--", 2) == 0) return fl_cli_usage_error("report: MESH comes first, then the options");
     /* --reference X, --html X, --no-viewer, or as pairs: reference=X ... */
-    static const fl_cli_option options[] = {{"reference", 0}, {"html", 0}, {"viewer", 1}, {NULL, 0}};
+    static const fl_cli_option options[] = {{"reference", 0}, {"html", 0}, {"viewer", 1}, {"max_deviation", 0},
+                                            {NULL, 0}};
     int st = fl_cli_read_options(L, c->argc, c->argv, c->operand + 1, options);
     if (st >= 0) return st;
     int values = lua_gettop(L) - 1, spell = values + 1;
@@ -66,6 +68,19 @@ int fl_report_main(lua_State *L, const fl_sweep_cli *c) {
         lua_pushstring(L, html);
         lua_setfield(L, opts, "html");
     }
+    /* --max-deviation D: the page and the text flag a deviation above D */
+    if (lua_getfield(L, values, "max_deviation") != LUA_TNIL) {
+        lua_Number d = lua_tonumber(L, -1);
+        if (!lua_isnumber(L, -1) || !(d > 0) || !isfinite(d)) {
+            lua_getfield(L, spell, "max_deviation");
+            return fl_cli_usage_error("%s: positive number expected, got '%s'", lua_tostring(L, -1),
+                                      luaL_tolstring(L, -2, NULL));
+        }
+        if (!ref) return fl_cli_usage_error("--max-deviation needs --reference (the deviation is from it)");
+        lua_pushnumber(L, d);
+        lua_setfield(L, opts, "max_deviation");
+    }
+    lua_pop(L, 1);
     if (!viewer) {
         lua_pushboolean(L, 0);
         lua_setfield(L, opts, "viewer");

@@ -20,8 +20,8 @@
  *   fl_simp_bound_edge      an upper bound of the priority (the exact lazy
  *                           queue, FEMLOD_SIMPLIFY_BOUND)
  *   fl_simp_expensive_checks  at pop time: normal cones (cone_check, PMP's
- *                           NormalCone), deviation (deviation_check, PMP's
- *                           Hausdorff tracking), intersections
+ *                           NormalCone), deviation (deviation.c),
+ *                           intersections
  *                           (intersect_grid.c)
  *
  * Invariants: an evaluation writes only its ring, its thread's scratch,
@@ -586,68 +586,13 @@ static int cone_check(simp *S, ring *R, const double p[3]) {
     return NO_REASON;
 }
 
-static int deviation_check(simp *S, ring *R, const double p[3], size_t *np) {
-    size_t n = 0;
-    /* the removed input vertices held by the changed faces, and i, j
-     * themselves when they are input vertices */
-    for (int side = 0; side < 2; side++) {
-        uint32_t v = side ? R->j : R->i;
-        const uint32_t *fl = S->refs + S->fstart[v];
-        for (uint32_t m = 0; m < S->fcount[v]; m++) {
-            uint32_t f = fl[m];
-            if (side == 1) { /* shared faces were listed from i */
-                const uint32_t *t = S->face[f].v;
-                if (t[0] == R->i || t[1] == R->i || t[2] == R->i) continue;
-            }
-            for (uint32_t x = S->fpt[f]; x != UINT32_MAX; x = S->pnext[x]) {
-                if (!buf_reserve((void **)&S->sc.pbuf, &S->sc.pbuf_cap, n + 1, sizeof *S->sc.pbuf)) {
-                    S->oom = 1;
-                    return FEMLOD_REJECT_DEVIATION;
-                }
-                S->sc.pbuf[n++] = x;
-            }
-        }
-    }
-    for (int side = 0; side < 2; side++) {
-        uint32_t v = side ? R->j : R->i;
-        if (S->node[v] < S->nv) {
-            if (!buf_reserve((void **)&S->sc.pbuf, &S->sc.pbuf_cap, n + 1, sizeof *S->sc.pbuf)) {
-                S->oom = 1;
-                return FEMLOD_REJECT_DEVIATION;
-            }
-            S->sc.pbuf[n++] = S->node[v];
-        }
-    }
-    if (!buf_reserve((void **)&S->sc.pdst, &S->sc.pdst_cap, n, sizeof *S->sc.pdst)) {
-        S->oom = 1;
-        return FEMLOD_REJECT_DEVIATION;
-    }
-    *np = n;
-    if (R->n == 0) return n ? FEMLOD_REJECT_DEVIATION : NO_REASON;
-    for (size_t m = 0; m < n; m++) {
-        const double *x = S->pos0 + 3 * (size_t)S->sc.pbuf[m];
-        double best = __builtin_inf();
-        uint32_t bi = 0;
-        for (size_t r = 0; r < R->n; r++) {
-            double d = fl_point_tri_dist2(x, p, P(S, R->a[r]), P(S, R->b[r]));
-            if (d < best) {
-                best = d;
-                bi = (uint32_t)r;
-            }
-        }
-        if (best > S->maxdev2) return FEMLOD_REJECT_DEVIATION;
-        S->sc.pdst[m] = bi;
-    }
-    return NO_REASON;
-}
-
 /* Candidate c passes the checks that are too costly for every evaluation. */
 int fl_simp_expensive_checks(simp *S, ring *R, int c) {
     STAT(expensive);
     const double *p = R->cand[c];
     int w;
     if (S->cone_on && (w = cone_check(S, R, p)) != NO_REASON) return w;
-    if (S->dev_on && (w = deviation_check(S, R, p, &S->npts)) != NO_REASON) return w;
+    if (S->dev_on && (w = fl_simp_deviation_check(S, R, p, &S->npts)) != NO_REASON) return w;
     return fl_simp_intersect_check(S, R, p);
 }
 

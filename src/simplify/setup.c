@@ -60,6 +60,7 @@ void fl_simp_free_scratch(simp *S) {
     free(S->sc.ebuf);
     free(S->sc.pbuf);
     free(S->sc.pdst);
+    free(S->sc.devbox);
     free(S->sc.newcone);
     free(S->sc.tbox);
     free(S->sc.obox);
@@ -846,12 +847,6 @@ femlod_status fl_simp_setup_features(simp *S, const femlod_mesh *mesh, const fem
     if (S->cone_on) {
         if (!ALLOC(S->cone, 4 * nt)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
         fl_pool_ranges(nth, nt, cone_init, S);
-    }
-    if (S->dev_on) {
-        if (!ALLOC(S->fpt, nt) || !ALLOC(S->pnext, nv))
-            return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
-        memset(S->fpt, 0xff, nt * sizeof *S->fpt);
-        memset(S->pnext, 0xff, nv * sizeof *S->pnext);
     }
     SETUP_T(9);
     if (!fl_heap_init(&S->heap, ne + 1)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");

@@ -134,6 +134,7 @@ typedef struct ring {
 typedef struct simp_stats {
     size_t evals, settles, bounds, rings, cands, cand_ok, solves, pops, links, expensive, cells, items, tritri, skipped;
     size_t planar;
+    size_t dev_queries, dev_nodes, dev_tris;
     size_t deferred;
     size_t attempts, attempt_low, attempt_fresh;
     double t[6]; /* seconds: setup, pre-phase, first evaluation of the passes, passes, queue, output */
@@ -163,6 +164,9 @@ typedef struct scratch {
     size_t cert_cap;
     float *newcone; /* per ring face */
     size_t newcone_cap;
+    double *devbox; /* deviation.c: per ring face the box of its new triangle */
+    size_t devbox_cap;
+    uint32_t dev_hint; /* deviation.c: the input tree's leaf to try first (speed only) */
 } scratch;
 
 typedef struct edge_rec {
@@ -220,8 +224,15 @@ typedef struct simp {
     float *cone; /* axis xyz, half-angle (radians) */
     uint32_t *fmark; /* set-up only: the pinched-vertex flood (with vertex stamps) */
     uint8_t *fmade; /* 1: made by a collapse, not read from the input (plane_rule) */
-    uint32_t *fpt; /* deviation: first removed input vertex assigned to the face */
+    /* deviation (deviation.c): per face its first input sample, per sample
+     * the next of its face's list (ids below nv: input vertices, the rest
+     * spos's points); the input tree; the sample spacing */
+    uint32_t *fpt;
     uint32_t *pnext;
+    double *spos;
+    size_t nsamp;
+    struct dev_tree *dtree;
+    double dev_h, dev_r2; /* spacing; the samples' limit, squared */
 
     /* edges */
     size_t ne;
@@ -417,6 +428,19 @@ FL_INTERNAL int fl_simp_link_check(simp *S, const ring *R);
 /* Candidate c passes the checks too costly for every evaluation: normal
  * cones, deviation, intersection. NO_REASON, DEFER_REASON or the reason. */
 FL_INTERNAL int fl_simp_expensive_checks(simp *S, ring *R, int c);
+
+/* }====== */
+
+/* {====== deviation.c: max_deviation's samples and input tree */
+
+/* The input samples in the per-face lists and the input tree (after the
+ * features: reads the faces, edges and positions of the set-up). */
+FL_INTERNAL femlod_status fl_simp_setup_deviation(simp *S, double mean_edge, femlod_error *err);
+FL_INTERNAL void fl_simp_free_deviation(simp *S);
+/* The collapse of R to p keeps both invariants of docs/design.md "A
+ * distance bound that holds"; *np gets the samples gathered (their new
+ * faces in sc.pdst, for fl_simp_collapse). NO_REASON or the reason. */
+FL_INTERNAL int fl_simp_deviation_check(simp *S, ring *R, const double p[3], size_t *np);
 
 /* }====== */
 

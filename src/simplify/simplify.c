@@ -125,6 +125,7 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     femlod_status st = fl_simp_setup_mesh(S, mesh, o, dropped, &m, err);
     if (st == FEMLOD_OK) st = resolve_options(S, o, mesh->nt, m.diag, m.mean_edge, m.size_max, err);
     if (st == FEMLOD_OK) st = fl_simp_setup_features(S, mesh, o, err);
+    if (st == FEMLOD_OK && S->dev_on) st = fl_simp_setup_deviation(S, m.mean_edge, err);
     if (st == FEMLOD_OK &&
         !fl_simp_build_grid(S, m.mean_edge > 0.0 ? FEMLOD_SIMPLIFY_GRID_CELL * m.mean_edge : 1.0))
         st = fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
@@ -160,6 +161,7 @@ static void simp_free(simp *S) {
     free(S->fmade);
     free(S->fpt);
     free(S->pnext);
+    fl_simp_free_deviation(S);
     free(S->ev);
     free(S->enf);
     free(S->edge);

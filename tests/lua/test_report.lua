@@ -69,6 +69,14 @@ do
   end
   T.eq(sum, q.vertices, "valence histogram counts every vertex")
   T.eq(vmax, q.valence_max, "largest valence = the report's valence_max")
+  -- max_deviation: a measured deviation above what was asked is flagged
+  local over = femlod.report(mesh, { reference = input, max_deviation = q.hausdorff / 2 })
+  T.eq(over.deviation_exceeded, true, "a deviation above max_deviation is flagged")
+  T.check(over.text:find("\n  deviation   EXCEEDS max_deviation ", 1, true), "the text says so: " .. over.text)
+  local within = femlod.report(mesh, { reference = input, max_deviation = q.hausdorff * 2 })
+  T.eq(within.deviation_exceeded, false, "within max_deviation: not flagged")
+  T.check(within.text:find("\n  deviation   within max_deviation ", 1, true), "the text says within")
+  T.eq(r.deviation_exceeded, false, "no max_deviation given: nothing to exceed")
   local no_ref = report.report(mesh)
   T.eq(no_ref.hausdorff, nil, "no deviation without a reference")
   T.eq(no_ref.reference_row, nil, "no reference row")
@@ -340,11 +348,13 @@ T.checkerr("test_report%.lua:%d+: bad argument #1 to 'report' %(femlod.Mesh expe
   function() femlod.report() end)
 T.checkerr("bad argument #1 to 'report' %(femlod.Mesh expected, got femlod.Hierarchy%)", femlod.report, h)
 T.checkerr("test_report%.lua:%d+: bad argument #2 to 'report' %(unknown option 'htm'; valid: "
-  .. "display_triangles, html, min_stretch, name, progress, reference, reference_name, title, viewer%)",
+  .. "display_triangles, html, max_deviation, min_stretch, name, progress, reference, reference_name, title, viewer%)",
   function() femlod.report(mesh, { htm = "x" }) end)
 T.checkerr("min_stretch: number in %[0, 1%] or false expected, got 2", femlod.report, mesh, { min_stretch = 2 })
 T.checkerr("display_triangles: integer >= 100 or false expected, got 10", femlod.report, mesh,
   { display_triangles = 10 })
+T.checkerr("bad argument #2 to 'report' %(max_deviation: positive number expected, got 0%)", femlod.report, mesh,
+  { max_deviation = 0 })
 T.checkerr("bad argument #2 to 'report' %(table expected, got string%)", femlod.report, mesh, "x.html")
 T.checkerr("bad argument #2 to 'report' %(reference: femlod.Mesh or path expected, got table%)", femlod.report,
   mesh, { reference = {} })
