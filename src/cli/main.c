@@ -11,6 +11,7 @@
  * number printing are locale independent.
  */
 #include "cliutil.h"
+#include "improve.h"
 #include "lua/lfemlod.h"
 #include "sandbox.h"
 #include "sweep.h"
@@ -29,7 +30,7 @@ enum { EXIT_OK = 0, EXIT_ERROR = 1, EXIT_USAGE = FL_CLI_EXIT_USAGE, EXIT_LIMIT =
 
 typedef enum command {
     CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY, CMD_LOD, CMD_SWEEP, CMD_REPORT,
-    CMD_REPAIR
+    CMD_REPAIR, CMD_IMPROVE
 } command;
 
 /* What the command line asked for. Indices point into argv. */
@@ -61,6 +62,10 @@ static void usage_text(FILE *f) {
           "  repair IN OUT    repair IN into OUT and print what changed: weld=TOL|false\n"
           "                   (default 0: equal positions)  drop_degenerate=  drop_duplicates=\n"
           "                   split_nonmanifold=  orient=  drop_unused=  (true|false)\n"
+          "  improve IN OUT   raise every element to the thresholds by flips, splits,\n"
+          "                   collapses and relaxation: --min-stretch X --max-size X\n"
+          "                   --max-valence N --max-deviation X --feature-angle DEG\n"
+          "                   --max-normal-change DEG (or off) --max-rounds N --lock I,J\n"
           "  simplify IN OUT  simplify IN into OUT; print the before/after report\n"
           "                   --target N | --ratio R  (triangles, or output/input)\n"
           "                   --tolerance X  --max-deviation X  --min-stretch X\n"
@@ -255,6 +260,9 @@ static int parse_args(lua_State *L, cli *c) {
     } else if (strcmp(w, "repair") == 0) {
         c->cmd = CMD_REPAIR;
         need = 2;
+    } else if (strcmp(w, "improve") == 0) {
+        c->cmd = CMD_IMPROVE;
+        need = 2;
     } else if (strcmp(w, "lod") == 0) {
         c->cmd = CMD_LOD;
         need = 2;
@@ -279,6 +287,7 @@ static int parse_args(lua_State *L, cli *c) {
                                            "an input and an output file",
                                            "a hierarchy file and an output file",
                                            "a recipe", "a mesh file",
+                                           "an input and an output file",
                                            "an input and an output file"};
         return fl_cli_usage_error("missing %s", what[c->cmd]);
     }
@@ -1154,6 +1163,7 @@ static int pmain(lua_State *L) {
         case CMD_SIMPLIFY: st = cmd_simplify(L, &c); break;
         case CMD_LOD: st = cmd_lod(L, &c); break;
         case CMD_REPAIR: st = cmd_repair(L, &c); break;
+        case CMD_IMPROVE: st = fl_cli_improve(L, c.argc - c.operand, c.argv + c.operand, c.quiet); break;
         case CMD_SWEEP:
         case CMD_REPORT: {
             fl_sweep_cli sc = {c.argc, c.argv, c.operand, c.seed, c.quiet, c.verbose, c.traceback};

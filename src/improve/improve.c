@@ -368,14 +368,22 @@ femlod_status femlod_improve(femlod_mesh **out, const femlod_mesh *mesh, const f
         for (size_t v = 0; v < mesh->nv; v++)
             if (o.lock_fn(o.lock_payload, mesh->pos[3 * v], mesh->pos[3 * v + 1], mesh->pos[3 * v + 2]))
                 locked[v] = 1;
-    /* grid cells of about the mean edge */
-    double esum = 0;
+    /* grid cells of about twice the geometric mean of the edges: a CAD
+     * export's few long edges would make cells of the arithmetic mean hold
+     * thousands of its many small triangles */
+    double lsum = 0;
+    size_t ln = 0;
     for (size_t f = 0; f < mesh->nt; f++) {
         const uint32_t *t = mesh->tri + 3 * f;
-        for (int k = 0; k < 3; k++)
-            esum += sqrt(dist2(mesh->pos + 3 * (size_t)t[k], mesh->pos + 3 * (size_t)t[(k + 1) % 3]));
+        for (int k = 0; k < 3; k++) {
+            double l = dist2(mesh->pos + 3 * (size_t)t[k], mesh->pos + 3 * (size_t)t[(k + 1) % 3]);
+            if (l > 0) {
+                lsum += 0.5 * log(l);
+                ln++;
+            }
+        }
     }
-    double h = mesh->nt ? 2.0 * esum / (3.0 * (double)mesh->nt) : 1.0;
+    double h = ln ? 2.0 * exp(lsum / (double)ln) : 1.0;
     if (!(h > 0)) h = diag > 0 ? diag : 1.0;
 
     imesh M;

@@ -288,7 +288,7 @@ int fl_imop_split(im_ctx *C, uint32_t a, uint32_t b, const double *at, int *why)
         t = fmin(0.9, fmax(0.1, t));
         for (int k = 0; k < 3; k++) ch.mpos[k] = pa[k] + t * ab[k];
     } else {
-        fl_imsurf_nearest(C->S, mid, sqrt(dist2(pa, pb)), ch.mpos);
+        fl_imsurf_nearest(C->S, mid, C->p->maxdev > 0 ? C->p->maxdev : 0.0, ch.mpos);
     }
     ch.nrm = n;
     ch.nadd = 0;
@@ -552,8 +552,7 @@ int fl_imop_relax(im_ctx *C, uint32_t v, int *why) {
     for (int step = 0; step < 2 && !done; step++) {
         double lam = step ? 0.5 : 1.0, target[3];
         for (int k = 0; k < 3; k++) target[k] = pv[k] + lam * d[k];
-        double len = sqrt(dot3(d, d));
-        fl_imsurf_nearest(C->S, target, lam * len + 1e-300, ch->mpos);
+        fl_imsurf_nearest(C->S, target, C->p->maxdev > 0 ? C->p->maxdev : 0.0, ch->mpos);
         if (!(new_min(M, ch) > before + 1e-9)) continue;
         int r = check(C, ch);
         if (r >= 0) {

@@ -62,7 +62,9 @@ static int visit(void *payload, uint32_t f) {
     const double *a = s->pos + 3 * (size_t)t[0], *b = s->pos + 3 * (size_t)t[1], *c = s->pos + 3 * (size_t)t[2];
     /* box test first: most entries are far */
     for (int k = 0; k < 3; k++) {
-        double lo = fmin(a[k], fmin(b[k], c[k])), hi = fmax(a[k], fmax(b[k], c[k]));
+        double lo = a[k] < b[k] ? a[k] : b[k], hi = a[k] > b[k] ? a[k] : b[k];
+        lo = c[k] < lo ? c[k] : lo;
+        hi = c[k] > hi ? c[k] : hi;
         double d = q->p[k] < lo ? lo - q->p[k] : (q->p[k] > hi ? q->p[k] - hi : 0.0);
         if (d * d > q->best2) return 0;
     }
