@@ -120,7 +120,9 @@ static int fix_face(run *R, uint32_t f) {
     imesh *M = C->M;
     int lk, sk, why = FEMLOD_IMPROVE_UNTRIED, w;
     face_edges(M, f, &lk, &sk);
-    const uint32_t *t = M->tri + 3 * (size_t)f;
+    /* a copy: a split may move the face array */
+    uint32_t t[3];
+    memcpy(t, M->tri + 3 * (size_t)f, sizeof t);
     uint32_t c = t[lk], a = t[(lk + 1) % 3], b = t[(lk + 2) % 3];
     uint32_t x = t[(sk + 1) % 3], y = t[(sk + 2) % 3];
     if (fl_imop_flip(C, a, b, 0, &w)) return 1;
