@@ -276,6 +276,29 @@ static int grow_faces(imesh *M) {
     return 1;
 }
 
+/* Lists every live face again in a grid emptied of its entries: removed
+ * and moved faces leave stale entries behind, which every query would walk.
+ * Queries answer the same either way (they filter by the current faces and
+ * break ties by index), so when this runs changes no result. */
+static int regrid(imesh *M) {
+    im_grid *g = &M->grid;
+    for (int l = 0; l < IM_LEVELS; l++) {
+        size_t cells = (size_t)g->lv[l].n[0] * (size_t)g->lv[l].n[1] * (size_t)g->lv[l].n[2];
+        memset(g->lv[l].head, 0xff, cells * sizeof *g->lv[l].head);
+    }
+    g->ne = 0;
+    g->nbig = 0;
+    for (size_t f = 0; f < M->nt; f++) {
+        const uint32_t *t = M->tri + 3 * f;
+        if (t[0] == IM_DEAD) continue;
+        double lo[3], hi[3];
+        im_box(im_P(M, t[0]), im_P(M, t[1]), im_P(M, t[2]), lo, hi);
+        if (!fl_imgrid_insert(g, (uint32_t)f, lo, hi)) return 0;
+    }
+    M->grid_ne0 = g->ne + g->nbig;
+    return 1;
+}
+
 uint32_t fl_imesh_add_face(imesh *M, uint32_t a, uint32_t b, uint32_t c) {
     if (M->nt == M->capt && !grow_faces(M)) return IM_DEAD;
     if (M->nt >= UINT32_MAX - 1) return IM_DEAD;
@@ -292,6 +315,7 @@ uint32_t fl_imesh_add_face(imesh *M, uint32_t a, uint32_t b, uint32_t c) {
     if (!fl_imgrid_insert(&M->grid, f, lo, hi)) return IM_DEAD;
     M->nt++;
     M->live++;
+    if (M->grid.ne + M->grid.nbig > 2 * M->grid_ne0 + 65536 && !regrid(M)) return IM_DEAD;
     return f;
 }
 
@@ -435,6 +459,7 @@ int fl_imesh_init(imesh *M, const femlod_mesh *m, double feature_angle, const ui
         if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
         if (fl_imesh_add_face(M, t[0], t[1], t[2]) == IM_DEAD) return 0;
     }
+    M->grid_ne0 = M->grid.ne + M->grid.nbig;
     double cos_fa = feature_angle < 0 ? -2.0 : cos(feature_angle * 3.14159265358979323846 / 180.0);
     return find_features(M, cos_fa, locked);
 }

@@ -99,6 +99,7 @@ typedef struct imesh {
     uint64_t *fe;
     size_t fecap, fecount, feused;
     im_grid grid; /* faces by box */
+    size_t grid_ne0; /* its entries when last built from the live faces */
     double eps;
 } imesh;
 
