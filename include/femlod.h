@@ -877,6 +877,98 @@ femlod_status femlod_hierarchy_validate(const femlod_hierarchy *h, femlod_error 
 
 /* }==================================================================== */
 
+/* {=== Improvement: local operators that raise quality (docs/design.md
+ * "Improving a mesh in place") */
+
+/*
+ * Flips, splits, collapses of short edges and tangential relaxation with
+ * projection back onto the input surface, on the elements that break a
+ * threshold, until every element meets them or no operator may change what
+ * remains. Every change keeps the features (no flip across a feature edge or
+ * boundary; corners and locked vertices stay; feature vertices are created
+ * and moved only on their line), the fidelity bound, the topology (closed
+ * stays closed, manifold stays manifold, same genus) and makes no new
+ * self-intersection. Options follow femlod_simplify_options' convention:
+ * 0 the default, < 0 (FEMLOD_SIMPLIFY_OFF) off, > 0 the value.
+ */
+typedef struct femlod_improve_options {
+    double min_stretch;   /* least stretch of every triangle; default 0.2 */
+    /* longest edge of every triangle (longer edges are split), length;
+     * default off */
+    double max_size;
+    int max_valence;      /* most neighbours of every vertex; default 12 */
+    /* length: the distance from every changed face's samples to the input
+     * surface and from every removed point to the changed faces; default
+     * 0.001 x the input's bounding-box diagonal */
+    double max_deviation;
+    double feature_angle;     /* degrees, as femlod_simplify_options; default 40 */
+    double max_normal_change; /* degrees: no face turns more in one change; default 60 */
+    int max_rounds;           /* rounds of the operators; default 20 */
+    /* locked input vertices, as femlod_simplify_options */
+    const uint32_t *lock;
+    size_t lock_count;
+    femlod_lock_fn lock_fn;
+    void *lock_payload;
+    /* about every round; a nonzero return stops with the mesh reached
+     * (success, report.cancelled set) */
+    femlod_progress_fn progress;
+    void *progress_payload;
+} femlod_improve_options;
+#define FEMLOD_IMPROVE_OPTIONS_INIT {0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, NULL, 0, NULL, NULL, NULL, NULL}
+
+/* Why an element still breaks a threshold: the first failing check of the
+ * last change that would have removed it, or what the geometry forces. */
+typedef enum femlod_improve_reason {
+    FEMLOD_IMPROVE_CORNER = 0,    /* its sharpest angle lies between two feature edges */
+    FEMLOD_IMPROVE_FIXED,         /* the operators it needs move a corner or locked vertex */
+    FEMLOD_IMPROVE_DEVIATION,     /* every fix leaves max_deviation */
+    FEMLOD_IMPROVE_STRETCH,       /* no operator raises the least stretch around it */
+    FEMLOD_IMPROVE_VALENCE,       /* every fix raises a valence past max_valence */
+    FEMLOD_IMPROVE_FOLDOVER,      /* every fix turns a face past max_normal_change */
+    FEMLOD_IMPROVE_TOPOLOGY,      /* every fix breaks the link condition, a feature or a boundary */
+    FEMLOD_IMPROVE_INTERSECTION,  /* every fix makes a new self-intersection */
+    FEMLOD_IMPROVE_UNTRIED,       /* the rounds ran out before any operator was tried */
+    FEMLOD_IMPROVE_REASON_COUNT
+} femlod_improve_reason;
+
+/* "corner", "fixed", "deviation", "stretch", "valence", "foldover",
+ * "topology", "intersection", "untried". */
+const char *femlod_improve_reason_name(femlod_improve_reason reason);
+
+typedef struct femlod_improve_report {
+    size_t triangles_in, vertices_in, triangles, vertices;
+    size_t flips, splits, collapses, relaxations;
+    size_t rounds;
+    int cancelled;
+    /* elements breaking a threshold in the input and in the output:
+     * triangles below min_stretch, triangles above max_size, vertices above
+     * max_valence */
+    size_t stretch_in, size_in, valence_in;
+    size_t stretch_out, size_out, valence_out;
+    /* the output's, by reason: each element counted once */
+    size_t stretch_by[FEMLOD_IMPROVE_REASON_COUNT];
+    size_t size_by[FEMLOD_IMPROVE_REASON_COUNT];
+    size_t valence_by[FEMLOD_IMPROVE_REASON_COUNT];
+    /* refused changes by first failing check */
+    size_t refused[FEMLOD_IMPROVE_REASON_COUNT];
+    double stretch_min_in, stretch_min; /* least stretch, input and output */
+    uint32_t valence_max_in, valence_max;
+    /* the thresholds in force, defaults resolved (FEMLOD_SIMPLIFY_OFF: off) */
+    double min_stretch, max_size, max_deviation, feature_angle, max_normal_change;
+    int max_valence;
+    double seconds; /* wall time (never influences the result) */
+} femlod_improve_report;
+
+/* The improved mesh in *out (the input is not changed); report may be NULL.
+ * Vertices: the input's that remain, in input order, then the new ones;
+ * degenerate triangles with a repeated index are dropped. Deterministic.
+ * FEMLOD_EINPUT on an option out of range or a lock index out of range. */
+femlod_status femlod_improve(femlod_mesh **out, const femlod_mesh *mesh,
+                             const femlod_improve_options *options,
+                             femlod_improve_report *report, femlod_error *err);
+
+/* }==================================================================== */
+
 /* {=== Curvature (paper 5.3.1, normal cycle) */
 
 /*

@@ -95,6 +95,26 @@ static const page pages[] = {
      "Examples:\n"
      "  femlod repair scan.stl scan.obj\n"
      "  femlod repair scan.stl scan.obj --weld 1e-6 --orient false\n"},
+    {"improve", "  improve IN OUT   raise every element to the thresholds; print what was done",
+     "improve IN OUT [options]\n"
+     "\n"
+     "Raises every element of IN to the thresholds by edge flips, splits, short-edge\n"
+     "collapses and tangential relaxation, keeping features, locks, topology and the\n"
+     "distance to IN; writes OUT and prints the operations and what remains, and why.\n"
+     "\n"
+     "Options (each of the thresholds also takes off):\n"
+     "  --min-stretch X  least stretch of every triangle (default 0.2)\n"
+     "  --max-size X     longest edge of every triangle\n"
+     "  --max-valence N  most neighbours of every vertex (default 12)\n"
+     "  --max-deviation X  distance to IN (default 0.001 x the diagonal)\n"
+     "  --feature-angle DEG  sharper edges are features (default 40)\n"
+     "  --max-normal-change DEG  most turn of a triangle's normal\n"
+     "  --max-rounds N   passes over the mesh at most\n"
+     "  --lock I,J,K     input vertices (1-based) that must not move\n"
+     "\n"
+     "Examples:\n"
+     "  femlod improve part.stl part_fe.obj\n"
+     "  femlod improve part.stl part_fe.obj --min-stretch 0.25 --max-valence 10\n"},
     {"simplify", "  simplify IN OUT  simplify IN into OUT; print the before/after report",
      "simplify IN OUT [options]\n"
      "\n"
@@ -181,7 +201,7 @@ static const page pages[] = {
 #define N_PAGES (sizeof pages / sizeof pages[0])
 
 const char *const fl_cli_command_names[] = {"run",    "-e",    "info",   "convert",
-                                            "repair", "simplify", "lod", "sweep",
+                                            "repair", "improve", "simplify", "lod", "sweep",
                                             "report", "help",  NULL};
 
 /* Formats femlod writes but does not read. */
@@ -260,7 +280,7 @@ int fl_cli_help_command(FILE *f, const char *name) {
         fprintf(f, "usage: femlod %s", pages[i].text);
         /* The pages of the commands that read or write meshes end with the
          * value rules and the formats. */
-        static const char *const with_files[] = {"info", "convert", "repair", "simplify",
+        static const char *const with_files[] = {"info", "convert", "repair", "improve", "simplify",
                                                  "lod", "report", NULL};
         for (const char *const *w = with_files; *w; w++) {
             if (strcmp(*w, name) != 0) continue;

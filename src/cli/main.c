@@ -15,6 +15,7 @@
  */
 #include "cliutil.h"
 #include "help.h"
+#include "improve.h"
 #include "lua/lfemlod.h"
 #include "sandbox.h"
 #include "sweep.h"
@@ -34,7 +35,7 @@ enum { EXIT_OK = 0, EXIT_ERROR = 1, EXIT_USAGE = FL_CLI_EXIT_USAGE, EXIT_LIMIT =
 
 typedef enum command {
     CMD_NONE, CMD_RUN, CMD_EVAL, CMD_INFO, CMD_CONVERT, CMD_SIMPLIFY, CMD_LOD, CMD_SWEEP, CMD_REPORT,
-    CMD_REPAIR
+    CMD_REPAIR, CMD_IMPROVE
 } command;
 
 /* What the command line asked for. Indices point into argv. */
@@ -214,6 +215,9 @@ static int parse_args(lua_State *L, cli *c) {
     } else if (strcmp(w, "repair") == 0) {
         c->cmd = CMD_REPAIR;
         need = 2;
+    } else if (strcmp(w, "improve") == 0) {
+        c->cmd = CMD_IMPROVE;
+        need = 2;
     } else if (strcmp(w, "lod") == 0) {
         c->cmd = CMD_LOD;
         need = 2;
@@ -239,7 +243,7 @@ static int parse_args(lua_State *L, cli *c) {
         return unknown_command(w);
     }
     static const char *const names[] = {"", "run", "-e", "info", "convert", "simplify",
-                                        "lod", "sweep", "report", "repair"};
+                                        "lod", "sweep", "report", "repair", "improve"};
     if (need) fl_cli_set_command(names[c->cmd]);
     /* femlod COMMAND --help (or -h): the command's page. For run and -e only
      * right after the word: what follows the recipe is the recipe's. */
@@ -258,6 +262,7 @@ static int parse_args(lua_State *L, cli *c) {
                                            "an input and an output file",
                                            "a hierarchy file and an output file",
                                            "a recipe", "a mesh file",
+                                           "an input and an output file",
                                            "an input and an output file"};
         return fl_cli_usage_error("missing %s", what[c->cmd]);
     }
@@ -1230,6 +1235,7 @@ static int pmain(lua_State *L) {
         case CMD_SIMPLIFY: st = cmd_simplify(L, &c); break;
         case CMD_LOD: st = cmd_lod(L, &c); break;
         case CMD_REPAIR: st = cmd_repair(L, &c); break;
+        case CMD_IMPROVE: st = fl_cli_improve(L, c.argc - c.operand, c.argv + c.operand, c.quiet); break;
         case CMD_SWEEP:
         case CMD_REPORT: {
             fl_sweep_cli sc = {c.argc, c.argv, c.operand, c.seed, c.quiet, c.verbose, c.traceback};
@@ -1240,7 +1246,7 @@ static int pmain(lua_State *L) {
         }
         if (c.verbose && st != EXIT_USAGE) {
             static const char *const names[] = {"", "run", "-e", "info", "convert", "simplify",
-                                                "lod", "sweep", "report", "repair"};
+                                                "lod", "sweep", "report", "repair", "improve"};
             fl_lua_log(L, "%s: %s in %.3f s", names[c.cmd], st == EXIT_OK ? "done" : "failed",
                        fl_lua_clock() - t0);
         }

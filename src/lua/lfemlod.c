@@ -157,6 +157,7 @@ int luaopen_femlod(lua_State *L) {
     fl_lua_preload_helpers(L);
     lua_newtable(L);
     fl_lmesh_open(L);
+    fl_limprove_open(L);
     fl_lhierarchy_open(L);
     lua_pushliteral(L, "femlod " FEMLOD_VERSION_STRING);
     lua_setfield(L, -2, "_VERSION");

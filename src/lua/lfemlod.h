@@ -55,6 +55,9 @@ FL_LUA_INTERNAL void fl_lmesh_release(lua_State *L, femlod_mesh **slot);
 
 /* }====== */
 
+/* Adds the method improve to femlod.Mesh (limprove.c; after fl_lmesh_open). */
+FL_LUA_INTERNAL void fl_limprove_open(lua_State *L);
+
 /* {====== femlod.Hierarchy (lhierarchy.c) */
 
 #define FL_HIERARCHY_MT "femlod.Hierarchy"

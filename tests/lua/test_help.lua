@@ -32,7 +32,7 @@ local commands = {}
 for line in (overview:match("\nCommands[^\n]*\n(.-)\n\n") or ""):gmatch("[^\n]+") do
   commands[#commands + 1] = line:match("^  (%-?[a-z]+) ")
 end
-T.eq(table.concat(commands, " "), "run -e info convert repair simplify lod sweep report help",
+T.eq(table.concat(commands, " "), "run -e info convert repair improve simplify lod sweep report help",
   "--help lists every command")
 -- }======
 

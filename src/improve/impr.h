@@ -1,0 +1,195 @@
+/*
+ * impr.h - what the files of the improvement stage share (internal to
+ * src/improve/; docs/design.md "Improving a mesh in place"):
+ *
+ *   improve.c   femlod_improve: options, rounds, census, output
+ *   ops.c       flip, split, collapse, relaxation: a change built aside,
+ *               checked, then written
+ *   imesh.c     the working mesh: faces, vertex face lists, feature edges,
+ *               vertex classes, the face grid
+ *   surface.c   the input surface: nearest point and distance
+ *
+ * Each file calls only those below it in this list. Every loop runs in index
+ * order, so the result depends on the input and options only.
+ */
+#ifndef FEMLOD_IMPR_H
+#define FEMLOD_IMPR_H
+
+#include "../core.h"
+#include "../intersect.h"
+#include "../vec3.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#define IM_DEAD UINT32_MAX
+
+/* vertex classes */
+enum { IM_FREE = 0, IM_LINE = 1, IM_FIXED = 2 };
+
+/* A grid of items by bounding box, entries only appended: a query meets
+ * every item whose box was inserted into an overlapping cell, including
+ * stale entries, which the caller filters by the item's current box. A box
+ * goes to the finest of the grid's levels where it covers few cells; one
+ * too big for them all goes to a list that every query meets. */
+#define IM_LEVELS 4
+typedef struct im_level {
+    double inv_h;
+    int n[3];
+    uint32_t *head; /* per cell: first entry, IM_DEAD if none */
+} im_level;
+typedef struct im_grid {
+    double origin[3];
+    im_level lv[IM_LEVELS]; /* cells 8 times wider at each level: a box goes to the first
+                               where it covers few cells */
+    uint32_t *item, *next;
+    size_t ne, cape;
+    uint32_t *big;
+    size_t nbig, capbig;
+} im_grid;
+
+FL_INTERNAL int fl_imgrid_init(im_grid *g, const double lo[3], const double hi[3], double h,
+                               size_t max_cells);
+FL_INTERNAL void fl_imgrid_free(im_grid *g);
+FL_INTERNAL int fl_imgrid_insert(im_grid *g, uint32_t item, const double lo[3], const double hi[3]);
+/* Calls fn(payload, item) for each entry overlapping the box (an item may
+ * come more than once); stops early when fn returns nonzero, returning it. */
+FL_INTERNAL int fl_imgrid_query(const im_grid *g, const double lo[3], const double hi[3],
+                                int (*fn)(void *payload, uint32_t item), void *payload);
+
+/* The input surface (surface.c). */
+typedef struct im_surface {
+    const double *pos;
+    const uint32_t *tri;
+    size_t nt;
+    im_grid grid;
+    uint32_t *mark;
+    uint32_t stamp;
+    double diag;
+} im_surface;
+
+FL_INTERNAL int fl_imsurf_init(im_surface *s, const femlod_mesh *m, double h);
+FL_INTERNAL void fl_imsurf_free(im_surface *s);
+/* 1 when some input triangle lies within r of p. */
+FL_INTERNAL int fl_imsurf_within(im_surface *s, const double p[3], double r);
+/* The nearest point of the input surface to p into q; its distance. */
+FL_INTERNAL double fl_imsurf_nearest(im_surface *s, const double p[3], double r0, double q[3]);
+
+/* A vertex's face list. */
+typedef struct im_list {
+    uint32_t *f;
+    uint32_t n, cap;
+} im_list;
+
+/* The working mesh (imesh.c). */
+typedef struct imesh {
+    size_t nv, capv, nv0; /* nv0: the input's vertices */
+    double *pos;
+    uint32_t *vorig; /* per vertex from nv0 on: the ends of the edge its split cut */
+    uint8_t *vclass;
+    im_list *vf;
+    uint32_t *vmark;
+    size_t nt, capt, live;
+    uint32_t *tri;    /* 3 per face; tri[3f] == IM_DEAD: removed */
+    uint8_t *freason; /* per face: the last refusal of a change that would remove it (+1; 0: none) */
+    uint32_t *fmark;
+    uint32_t stamp;
+    /* feature edges: open addressing on (min << 32 | max); 0 empty, 1 removed */
+    uint64_t *fe;
+    size_t fecap, fecount, feused;
+    im_grid grid; /* faces by box */
+    size_t grid_ne0; /* its entries when last built from the live faces */
+    double eps;
+} imesh;
+
+FL_INTERNAL int fl_imesh_init(imesh *M, const femlod_mesh *m, double feature_angle,
+                              const uint8_t *locked, double h);
+FL_INTERNAL void fl_imesh_free(imesh *M);
+FL_INTERNAL uint32_t fl_imesh_next_stamp(imesh *M);
+FL_INTERNAL int fl_imesh_is_feature(const imesh *M, uint32_t a, uint32_t b);
+FL_INTERNAL int fl_imesh_set_feature(imesh *M, uint32_t a, uint32_t b, int on);
+/* Faces with both a and b into out (at most max); the count (may exceed max). */
+FL_INTERNAL size_t fl_imesh_edge_faces(const imesh *M, uint32_t a, uint32_t b, uint32_t *out, size_t max);
+FL_INTERNAL int fl_imesh_has_edge(const imesh *M, uint32_t a, uint32_t b);
+FL_INTERNAL uint32_t fl_imesh_valence(imesh *M, uint32_t v);
+/* Appends a face (lists, grid); its slot, or IM_DEAD on ENOMEM. */
+FL_INTERNAL uint32_t fl_imesh_add_face(imesh *M, uint32_t a, uint32_t b, uint32_t c);
+FL_INTERNAL void fl_imesh_remove_face(imesh *M, uint32_t f);
+/* A new vertex; its index, or IM_DEAD on ENOMEM. */
+FL_INTERNAL uint32_t fl_imesh_add_vertex(imesh *M, const double p[3], uint8_t cls);
+
+static inline const double *im_P(const imesh *M, uint32_t v) { return M->pos + 3 * (size_t)v; }
+
+static inline double im_stretch(const double *a, const double *b, const double *c) {
+    double la = sqrt(dist2(b, c)), lb = sqrt(dist2(a, c)), lc = sqrt(dist2(a, b));
+    double L = fmax(la, fmax(lb, lc));
+    double s = 0.5 * (la + lb + lc);
+    if (!(L > 0.0) || !(s > 0.0)) return 0.0;
+    double r2 = (s - la) * (s - lb) * (s - lc) / s;
+    if (!(r2 > 0.0)) return 0.0;
+    return sqrt(12.0 * r2) / L;
+}
+
+static inline double im_face_stretch(const imesh *M, uint32_t f) {
+    const uint32_t *t = M->tri + 3 * (size_t)f;
+    return im_stretch(im_P(M, t[0]), im_P(M, t[1]), im_P(M, t[2]));
+}
+
+static inline void im_normal(double n[3], const double *a, const double *b, const double *c) {
+    double e1[3], e2[3];
+    sub3(e1, b, a);
+    sub3(e2, c, a);
+    cross3(n, e1, e2);
+}
+
+static inline void im_box(const double *a, const double *b, const double *c, double lo[3], double hi[3]) {
+    for (int k = 0; k < 3; k++) {
+        lo[k] = fmin(a[k], fmin(b[k], c[k]));
+        hi[k] = fmax(a[k], fmax(b[k], c[k]));
+    }
+}
+
+/* {====== ops.c */
+
+typedef struct im_params {
+    double minst, maxsz, maxdev, cos_nc;
+    int maxval;
+    int st_on, sz_on, val_on;
+} im_params;
+
+/* The refusals (femlod_improve_reason values, +1 in freason). */
+typedef struct im_ctx {
+    imesh *M;
+    im_surface *S;
+    const im_params *p;
+    size_t flips, splits, collapses, relaxations;
+    size_t refused[16];
+    int oom;
+    /* scratch */
+    uint32_t *buf;
+    size_t bufcap;
+} im_ctx;
+
+/* Each returns 1 when the change was made, 0 when refused (the reason in
+ * *why, a femlod_improve_reason) or on ENOMEM (C->oom set). */
+FL_INTERNAL int fl_imop_flip(im_ctx *C, uint32_t a, uint32_t b, int for_valence, int *why);
+FL_INTERNAL int fl_imop_split(im_ctx *C, uint32_t a, uint32_t b, const double *at, int *why);
+FL_INTERNAL int fl_imop_collapse(im_ctx *C, uint32_t a, uint32_t b, int *why);
+FL_INTERNAL int fl_imop_relax(im_ctx *C, uint32_t v, int *why);
+
+/* }====== */
+
+/* Grows *p to at least n entries (doubling); 0 on ENOMEM. */
+static inline int buf_grow(uint32_t **p, size_t *cap, size_t n) {
+    if (n <= *cap) return 1;
+    size_t c = *cap ? *cap : 64;
+    while (c < n) c *= 2;
+    uint32_t *q = fl_realloc(*p, c, sizeof *q);
+    if (!q) return 0;
+    *p = q;
+    *cap = c;
+    return 1;
+}
+
+#endif
