@@ -889,7 +889,15 @@ static void relativise_files(const sweep *s, cJSON *list) {
         cJSON *p = cJSON_GetObjectItemCaseSensitive(f, "path");
         if (cJSON_IsString(p)) {
             const char *rel = relative_to_out(s, p->valuestring);
-            if (rel != p->valuestring) cJSON_SetValuestring(p, rel);
+            if (rel != p->valuestring) {
+                /* a copy: cJSON copies the new value over the old in place,
+                 * and the two overlap */
+                char *copy = strdup(rel);
+                if (copy) {
+                    cJSON_SetValuestring(p, copy);
+                    free(copy);
+                }
+            }
         }
     }
 }
