@@ -166,29 +166,32 @@ double fl_lua_clock(void) {
     return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
 }
 
+/* "femlod: [what]MESSAGE\n" on standard error, after standard output (so
+ * that interleaved lines keep their order) and over a progress bar on a
+ * terminal (it redraws itself). */
+static void vlog(const char *what, const char *fmt, va_list ap) {
+    fflush(stdout);
+    fputs(isatty(2) ? "\r\033[Kfemlod: " : "femlod: ", stderr);
+    fputs(what, stderr);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+    fflush(stderr);
+}
+
 void fl_lua_log(lua_State *L, const char *fmt, ...) {
     (void)L;
     va_list ap;
-    fflush(stdout); /* keep the order of interleaved lines on a terminal */
-    /* a progress bar may be on the line: clear it (it redraws itself) */
-    fputs(isatty(2) ? "\r\033[Kfemlod: " : "femlod: ", stderr);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    vlog("", fmt, ap);
     va_end(ap);
-    fputc('\n', stderr);
-    fflush(stderr);
 }
 
 void fl_lua_warn(lua_State *L, const char *fmt, ...) {
     (void)L;
     va_list ap;
-    fflush(stdout);
-    fputs(isatty(2) ? "\r\033[Kfemlod: warning: " : "femlod: warning: ", stderr);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    vlog("warning: ", fmt, ap);
     va_end(ap);
-    fputc('\n', stderr);
-    fflush(stderr);
 }
 
 /* }==================================================================== */

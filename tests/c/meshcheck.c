@@ -3,6 +3,7 @@
 #include "intersect.h"
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -101,4 +102,16 @@ size_t meshcheck_self_intersections(const femlod_mesh *m, double eps) {
         }
     }
     return 0;
+}
+
+femlod_mesh *meshcheck_load(const char *dir, const char *name) {
+    char path[1024];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    femlod_mesh *m = NULL;
+    femlod_error err;
+    if (femlod_mesh_read(&m, path, NULL, &err) != FEMLOD_OK) {
+        fprintf(stderr, "cannot read %s: %s\n", path, err.message);
+        return NULL;
+    }
+    return m;
 }

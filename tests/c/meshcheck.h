@@ -10,4 +10,7 @@
  * edge; eps is the plane tolerance of fl_tri_tri_intersect. */
 size_t meshcheck_self_intersections(const femlod_mesh *m, double eps);
 
+/* Reads DIR/NAME; on failure prints the reader's message and returns NULL. */
+femlod_mesh *meshcheck_load(const char *dir, const char *name);
+
 #endif

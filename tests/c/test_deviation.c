@@ -4,6 +4,7 @@
  * several d on cover, fandisk, bunny and a generated part; and the bound's
  * runs repeat byte for byte for 1 and 2 threads, exact and fast. */
 #include "check.h"
+#include "meshcheck.h"
 #include "shapes.h"
 
 #include "femlod.h"
@@ -14,15 +15,8 @@
 #include <stdlib.h>
 
 static femlod_mesh *load(const char *name) {
-    char path[512];
-    snprintf(path, sizeof path, "%s/%s", FEMLOD_SHARED_DATA, name);
-    femlod_mesh *m = NULL;
-    femlod_error err;
-    if (femlod_mesh_read(&m, path, NULL, &err) != FEMLOD_OK) {
-        fprintf(stderr, "cannot read %s: %s\n", path, err.message);
-        CHECK(0);
-        return NULL;
-    }
+    femlod_mesh *m = meshcheck_load(FEMLOD_SHARED_DATA, name);
+    CHECK(m != NULL);
     return m;
 }
 

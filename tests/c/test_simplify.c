@@ -10,6 +10,7 @@
 #include "check.h"
 #include "core.h"
 #include "intersect.h"
+#include "meshcheck.h"
 #include "shapes.h"
 
 #include <stdlib.h>
@@ -29,15 +30,8 @@ static int heavy(void) {
 }
 
 static femlod_mesh *load(const char *name) {
-    char path[512];
-    snprintf(path, sizeof path, "%s/%s", FEMLOD_SHARED_DATA, name);
-    femlod_mesh *m = NULL;
-    femlod_error err;
-    if (femlod_mesh_read(&m, path, NULL, &err) != FEMLOD_OK) {
-        fprintf(stderr, "cannot read %s: %s\n", path, err.message);
-        CHECK(0);
-        return NULL;
-    }
+    femlod_mesh *m = meshcheck_load(FEMLOD_SHARED_DATA, name);
+    CHECK(m != NULL);
     return m;
 }
 
