@@ -2,11 +2,12 @@
  * lod.c - adaptive LOD on the vertex hierarchy (paper section 5.3).
  *
  * Global LOD with density preservation (5.3.2, with method-notes.md's
- * rules): S_REF is fixed when the call starts (front nodes: their e_size;
+ * rules): S_REF is fixed when the call starts (front nodes: their size;
  * nodes below the front: their front ancestor's; nodes above: the mean of
- * their children's, bottom-up), r = e_size / S_REF, and the count moves by
+ * their children's, bottom-up), r = size / S_REF, and the count moves by
  * collapsing the pair whose parent has the smallest r or splitting the
- * front node with the largest r.
+ * front node with the largest r. A node's size is its order size, not the
+ * paper's e_size (docs/design.md "Density in the simplification's order").
  *
  * Curvature LOD (5.3.1a): kappa on the leaves, the maximum of the children
  * on internal nodes (a collapse keeps the larger kappa), and a refine whose
@@ -23,12 +24,40 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The order size of every node: 1 / sqrt(n), n the triangles of the
+ * simplification's mesh right after the collapse that made the node (the
+ * input's count for a leaf). It is the mean element size, up to the part's
+ * area, of the plain simplification at the moment it made the node, so r
+ * compares a region with the plain simplification's own fronts: a region
+ * the tolerance kept fine is collapsed late by the simplification, and
+ * its nodes count as coarse here however short their edges (the paper's
+ * e_size counts them as fine, and the rescale merged them at the rate of
+ * flat ones: docs/performance.md). Collapses on a boundary remove one
+ * face, inside two; the count only falls, and never below 1. */
+static double *order_sizes(const femlod_hierarchy *h) {
+    double *s = fl_alloc(h->nn, sizeof(double));
+    if (!s) return NULL;
+    size_t n = h->nf_in;
+    for (size_t x = 0; x < h->nv; x++) s[x] = 1.0 / sqrt(n > 0 ? (double)n : 1.0);
+    for (size_t c = 0; c < h->nc; c++) {
+        size_t removed = h->removed_start[c + 1] - h->removed_start[c];
+        size_t created = h->created_start[c + 1] - h->created_start[c];
+        n = n + created > removed ? n + created - removed : 1;
+        s[h->nv + c] = 1.0 / sqrt((double)n);
+    }
+    return s;
+}
+
 /* r of every node for the current front. */
 static double *density_ratios(const femlod_hierarchy *h) {
-    double *sref = fl_alloc(h->nn, sizeof(double));
-    if (!sref) return NULL;
+    double *sref = fl_alloc(h->nn, sizeof(double)), *size = order_sizes(h);
+    if (!sref || !size) {
+        free(sref);
+        free(size);
+        return NULL;
+    }
     for (size_t x = 0; x < h->nn; x++)
-        if (h->state[x] == FRONT) sref[x] = h->e_size[x];
+        if (h->state[x] == FRONT) sref[x] = size[x];
     /* parents have larger ids than children: downwards for the nodes below
      * the front, upwards for the ones above it */
     for (size_t x = h->nn; x-- > 0;)
@@ -39,7 +68,8 @@ static double *density_ratios(const femlod_hierarchy *h) {
             sref[x] = 0.5 * (sref[h->child[2 * c]] + sref[h->child[2 * c + 1]]);
         }
     for (size_t x = 0; x < h->nn; x++)
-        sref[x] = sref[x] > 0 ? h->e_size[x] / sref[x] : 1.0; /* now r */
+        sref[x] = sref[x] > 0 ? size[x] / sref[x] : 1.0; /* now r */
+    free(size);
     return sref;
 }
 

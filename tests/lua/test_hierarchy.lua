@@ -802,6 +802,42 @@ end
 -- }======
 
 -- {====== the hierarchy below the target (docs/design.md "The hierarchy below the target")
+
+-- The input vertices whose kappa is at or above its 95th percentile (the
+-- default radius, as refine_curvature's) that are vertices of h's front.
+local function high_kappa_kept(m, h)
+  local kappa, sorted = m:curvature().kappa, {}
+  for i = 1, #kappa do sorted[i] = kappa[i] end
+  table.sort(sorted)
+  local top, n = sorted[math.ceil(0.95 * #sorted)], 0
+  for _, id in ipairs(h:front()) do
+    if id <= #kappa and kappa[id] >= top then n = n + 1 end
+  end
+  return n
+end
+
+-- A generated part: a plate 100 x 100 of 150 x 150 cells (45,000
+-- triangles) with three narrow Gaussian bumps {x, y, height, sigma}.
+local function bumpy_plate()
+  local n, pos, tri = 150, {}, {}
+  local bumps = { { 30, 30, 4, 2.5 }, { 70, 40, 3, 2 }, { 45, 75, 5, 3 } }
+  for j = 0, n do
+    for i = 0, n do
+      local x, y, z = 100 * i / n, 100 * j / n, 0
+      for _, b in ipairs(bumps) do z = z + b[3] * math.exp(-((x - b[1]) ^ 2 + (y - b[2]) ^ 2) / (2 * b[4] ^ 2)) end
+      pos[#pos + 1] = { x, y, z }
+    end
+  end
+  local function id(i, j) return j * (n + 1) + i + 1 end
+  for j = 0, n - 1 do
+    for i = 0, n - 1 do
+      tri[#tri + 1] = { id(i, j), id(i + 1, j), id(i + 1, j + 1) }
+      tri[#tri + 1] = { id(i, j), id(i + 1, j + 1), id(i, j + 1) }
+    end
+  end
+  return femlod.mesh { positions = pos, triangles = tri }
+end
+
 do
   local cover <close> = femlod.load(P.shared .. "/cover.obj")
   local opts = { target = 12000, tolerance = 0.15, min_stretch = 0.2, max_size = 15, max_valence = 12 }
@@ -848,16 +884,26 @@ do
   ops, n, why = h:rescale { target = 200000 }
   T.eq(n, cover:counts().triangles, "rescale above the input reaches the input")
   T.eq(why, "the input's count", "and says so")
-  -- the card's recipe: simplify to 12k, refine curvature, rescale back
+  -- the order size: from the input, a rescale to the target retraces the
+  -- simplification (the plain result is a front of uniform density)
   h:rescale { target = 12000 }
+  T.eq(serial(h:mesh()), serial(plain:mesh()), "rescale from the input to 12,000: the plain simplification")
+  -- the card's recipe: simplify to 12k, refine curvature, rescale back
   h:refine_curvature {}
   check_front("refine_curvature below and above the target")
   local fine = h:counts().triangles
   T.check(fine > 30000, "refine_curvature from 12,000: " .. fine)
   ops, n, why = h:rescale { target = 12000 }
   T.check(math.abs(n - 12000) <= 60, "the recipe's rescale back: within 0.5% of 12,000: " .. n)
+  T.eq(why, nil, "the recipe's rescale: no reason")
   T.check(serial(h:mesh()) ~= serial(plain:mesh()), "the recipe does not give the plain simplification back")
   check_front("the recipe's result")
+  -- and it keeps the curved parts finer than the plain simplification
+  local kept, k_plain = high_kappa_kept(cover, h), high_kappa_kept(cover, plain)
+  T.check(kept >= 1.25 * k_plain, string.format(
+    "the recipe keeps >= 1.25x the plain simplification's high-kappa input vertices: %d against %d", kept, k_plain))
+  print(string.format("cover recipe: %d high-kappa input vertices kept against the plain simplification's %d (%.2fx)",
+    kept, k_plain, kept / k_plain))
   -- region and coarsen below the target
   h:rescale { target = 4000 }
   h:refine_region { sphere = { center = { 0, 0, 0 }, radius = 20 }, size = 0 }
@@ -878,6 +924,31 @@ do
   T.eq(why, S.hierarchy_binding, "and knows why it stops there")
   T.errmsg("code:1: bad argument #1 to 'simplify' (hierarchy_floor: integer >= 1 or boolean expected, got 0)",
     "m:simplify { target = 10, hierarchy_floor = 0 }", { m = fandisk })
+end
+
+-- the card's recipe on a generated part: the plate to 8,000 with the card's
+-- thresholds (at 4,000 the plain simplification keeps 3 of the 1,141
+-- high-kappa vertices, too few to compare)
+do
+  local plate <close> = bumpy_plate()
+  local opts = { target = 8000, tolerance = 0.15, min_stretch = 0.2, max_size = 15, max_valence = 12 }
+  local h <close> = plate:simplify(opts)
+  local k_plain = high_kappa_kept(plate, h)
+  h:refine_curvature {}
+  T.check(h:counts().triangles > 20000, "plate: refine_curvature from 8,000: " .. h:counts().triangles)
+  local _, n, why = h:rescale { target = 8000 }
+  T.check(math.abs(n - 8000) <= 40, "plate: the recipe's rescale back: within 0.5% of 8,000: " .. n)
+  T.eq(why, nil, "plate: no reason")
+  local kept = high_kappa_kept(plate, h)
+  T.check(k_plain >= 20, "plate: the plain simplification keeps some high-kappa vertices: " .. k_plain)
+  T.check(kept >= 1.25 * k_plain, string.format(
+    "plate: the recipe keeps >= 1.25x the plain simplification's high-kappa input vertices: %d against %d", kept, k_plain))
+  print(string.format("plate recipe: %d high-kappa input vertices kept against the plain simplification's %d (%.2fx)",
+    kept, k_plain, kept / k_plain))
+  local q = h:mesh():quality()
+  T.check(q.manifold and q.stretch_min >= 0.2 - 1e-12 and q.size_max <= 15 + 1e-9 and q.valence_max <= 12,
+    "plate: the recipe's result meets the thresholds")
+  T.eq(h:validate(), true, "plate: valid")
 end
 -- }======
 
