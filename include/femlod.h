@@ -713,11 +713,16 @@ femlod_status femlod_hierarchy_extract(femlod_hierarchy *h, femlod_mesh **out, u
                                        femlod_error *err);
 
 /* Global LOD with density preservation (paper 5.3.2): collapses the pair
- * whose parent has the smallest r = e_size / S_REF, or splits the front node
+ * whose parent has the smallest r = s / S_REF, or splits the front node
  * with the largest r, until the front has `target` triangles (or the
  * nearest count the hierarchy allows: dependencies can move it by a few).
- * S_REF is fixed from the front when the call starts, so the density
- * distribution of that front is kept. *ops gets the operations done.
+ * s is a node's order size, 1 / sqrt(n) with n the triangles of the
+ * simplification's mesh right after it made the node (the input's count
+ * for a leaf), in place of the paper's e_size (docs/design.md "Density in
+ * the simplification's order"). S_REF is fixed from the front when the call
+ * starts, so the density distribution of that front is kept; from the
+ * input's front, a rescale to a count the simplification passed through
+ * gives its mesh at that count. *ops gets the operations done.
  * options (may be NULL): progress as the triangle count moves towards the
  * target; a cancel fails with FEMLOD_ECANCELLED, leaving the valid front
  * reached so far (*ops counts its operations: rescale again to go on). */
