@@ -914,6 +914,10 @@ do
   T.eq(f:stats().hierarchy_stop, "target", "at its floor")
   f:rescale { target = 8000 }
   T.eq(f:counts().triangles, 8000, "a floor is reachable")
+  -- half the target where the floor does not allow it: the floor, and why
+  ops, n, why = f:rescale { target = 6000 }
+  T.eq(n, 8000, "rescale to half the target under a floor of 8000: stops at the floor")
+  T.eq(why, "the hierarchy goes no coarser (hierarchy_floor)", "and says why")
   -- saved and loaded: the whole hierarchy
   h:rescale { target = 12000 }
   h:save(tmp("below.flh"))
@@ -949,6 +953,12 @@ do
   T.check(q.manifold and q.stretch_min >= 0.2 - 1e-12 and q.size_max <= 15 + 1e-9 and q.valence_max <= 12,
     "plate: the recipe's result meets the thresholds")
   T.eq(h:validate(), true, "plate: valid")
+  -- half the target from the recipe's front: the thresholds allow it
+  _, n, why = h:rescale { target = 4000 }
+  T.check(math.abs(n - 4000) <= 20 and why == nil, "plate: rescale to half the target within 0.5%: " .. n)
+  q = h:mesh():quality()
+  T.check(q.manifold and q.stretch_min >= 0.2 - 1e-12 and q.size_max <= 15 + 1e-9 and q.valence_max <= 12,
+    "plate: half the target meets the thresholds")
 end
 -- }======
 
