@@ -481,7 +481,7 @@ do
   end
   simplify_usage("femlod: unknown option '--bogus' (valid: --target, --ratio, --tolerance, --max-deviation, "
     .. "--min-stretch, --max-size, --max-valence, --feature-angle, --feature-weight, --max-normal-change, "
-    .. "--keep-boundary, --area-weighted, --fast-above, --threads, --lock, --hierarchy, --hierarchy-floor)", "--bogus")
+    .. "--keep-boundary, --area-weighted, --error-order, --fast-above, --threads, --lock, --hierarchy, --hierarchy-floor)", "--bogus")
   simplify_usage("femlod: --quiet is an option of femlod, not of simplify: put it before the command "
     .. "(femlod --quiet simplify ...)", "--target", "10", "--quiet")
   simplify_usage("femlod: unknown option '--targt'; did you mean --target?", "--targt", "10")
@@ -506,7 +506,7 @@ do
   simplify_usage("femlod: option given twice: 'target'", "--target", "100", "target=200")
   simplify_usage("femlod: unknown parameter 'targt'; did you mean target?", "targt=100")
   simplify_usage("femlod: unknown parameter 'zzz' (valid: target, ratio, tolerance, max_deviation, min_stretch, "
-    .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, fast_above, threads, lock, "
+    .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, error_order, fast_above, threads, lock, "
     .. "hierarchy, hierarchy_floor)",
     "zzz=100")
   simplify_usage("femlod: expected name=value, got '3000'", "--keep-boundary", "3000")

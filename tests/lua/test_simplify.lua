@@ -296,10 +296,10 @@ end
 -- {====== option errors: text and position
 local env = { m = fandisk, femlod = femlod }
 local E = "code:1: bad argument #1 to 'simplify' ("
-T.errmsg(E .. "unknown key 'targt'; valid keys: area_weighted, fast_above, feature_angle, feature_weight, hierarchy_floor, "
+T.errmsg(E .. "unknown key 'targt'; valid keys: area_weighted, error_order, fast_above, feature_angle, feature_weight, hierarchy_floor, "
   .. "keep_boundary, lock, max_deviation, max_normal_change, max_size, max_valence, min_stretch, "
   .. "progress, ratio, target, threads, tolerance)", "m:simplify { targt = 100 }", env)
-T.errmsg(E .. "unexpected number key 1; valid keys: area_weighted, fast_above, feature_angle, feature_weight, hierarchy_floor, "
+T.errmsg(E .. "unexpected number key 1; valid keys: area_weighted, error_order, fast_above, feature_angle, feature_weight, hierarchy_floor, "
   .. "keep_boundary, lock, max_deviation, max_normal_change, max_size, max_valence, min_stretch, "
   .. "progress, ratio, target, threads, tolerance)", "m:simplify { 100 }", env)
 T.errmsg(E .. "target: integer >= 1 expected, got 0)", "m:simplify { target = 0 }", env)
