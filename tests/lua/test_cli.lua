@@ -420,6 +420,14 @@ do
   T.check(T.readfile(out2) == T.readfile(out), "flags and name=value give byte-identical output")
   code, text = run("simplify", fandisk, out2, "--target=3000", "--min-stretch=0.3")
   T.check(T.readfile(out2) == T.readfile(out), "--flag=value too")
+  -- --error-order: the Lua option error_order (a different mesh at the same count)
+  local out5, out6 = path("simplified5.obj"), path("simplified6.obj")
+  T.eq(run("simplify", fandisk, out5, "--target", "3000", "--error-order"), 0, "--error-order")
+  T.eq(run("simplify", fandisk, out6, "--target", "3000", "error_order=true"), 0, "error_order=true")
+  T.check(T.readfile(out5) == T.readfile(out6), "--error-order is error_order=true")
+  local out7 = path("simplified7.obj")
+  T.eq(run("simplify", fandisk, out7, "--target", "3000"), 0, "the paper's order")
+  T.check(T.readfile(out5) ~= T.readfile(out7), "--error-order changes the order")
 
   -- off, switches and lock
   local out3 = path("simplified3.stl")
