@@ -12,6 +12,8 @@
  *                         helper) and applied in list order
  *   fl_simp_evaluate_all  every edge not queued (the start of a phase and
  *                         the final retry), in chunks on the run's threads
+ *   fl_simp_start_cap,    error_order's schedule: C1's cap and the stretch
+ *   fl_simp_raise_cap     floor per phase, the next cap when a round is dry
  *
  * Invariants: the heap holds every eligible edge with its priority (with
  * FEMLOD_SIMPLIFY_BOUND, an upper bound marked E_STALE, settled before
