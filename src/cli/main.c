@@ -759,6 +759,7 @@ static const simplify_opt simplify_opts[] = {
     {"--max-normal-change", "max_normal_change", OPT_THRESHOLD},
     {"--keep-boundary", "keep_boundary", OPT_SWITCH},
     {"--area-weighted", "area_weighted", OPT_SWITCH},
+    {"--error-order", "error_order", OPT_SWITCH},
     {"--fast-above", "fast_above", OPT_THRESHOLD},
     {"--threads", "threads", OPT_NUMBER},
     {"--lock", "lock", OPT_LOCK},

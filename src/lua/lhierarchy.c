@@ -51,8 +51,8 @@ static const char *const simplify_keys[] = {
     "target",         "ratio",          "tolerance",         "max_deviation",
     "min_stretch",    "max_size",       "max_valence",       "feature_angle",
     "feature_weight", "max_normal_change", "keep_boundary",  "area_weighted",
-    "fast_above",          "threads",        "lock",           "progress",
-    "hierarchy_floor",     NULL};
+    "error_order",    "fast_above",        "threads",        "lock",
+    "progress",       "hierarchy_floor",   NULL};
 
 /* The thresholds of type double that `false` switches off, in the order of
  * femlod_simplify_options; max is the largest value allowed. */
@@ -185,14 +185,15 @@ const char *fl_simplify_read_options(lua_State *L, int idx, femlod_simplify_opti
     }
     lua_pop(L, 1);
 
-    static const char *const flags[] = {"keep_boundary", "area_weighted"};
-    for (int k = 0; k < 2; k++) {
+    static const char *const flags[] = {"keep_boundary", "area_weighted", "error_order"};
+    for (int k = 0; k < 3; k++) {
         *key = flags[k];
         t = lua_getfield(L, idx, flags[k]);
         if (t != LUA_TNIL && t != LUA_TBOOLEAN) return bad_value(L, "boolean", NULL);
         int on = lua_toboolean(L, -1);
         if (k == 0) o->keep_boundary = on;
-        else o->area_weighted = on;
+        else if (k == 1) o->area_weighted = on;
+        else o->error_order = on;
         lua_pop(L, 1);
     }
     *key = NULL;

@@ -13,7 +13,7 @@
  *                           (fl_quadric_optimum2, cached per edge); the
  *                           fixed endpoint; endpoints and midpoint along a
  *                           feature line (4.2.1)
- *   eval_candidate,         C1 tolerance, C3 size, degeneracy, turn against
+ *   eval_candidate,         C1 tolerance (or error_order's cap), C3 size, degeneracy, turn against
  *   tri_eval                the current mesh, C2 stretch (4.2.2), and
  *                           rho = Sz_DIF * St_MIN * St_AVE (4.2.3)
  *   fl_simp_evaluate        all of it for one edge
@@ -310,7 +310,7 @@ static int eval_candidate(simp *S, ring *R, const double p[3], double *rho, uint
     STAT(cands);
     *hint = UINT32_MAX;
     const fl_quadric *qi = S->q + R->i, *qj = S->q + R->j;
-    if (S->tol_on && fl_quadric_eval2(qi, qj, p) > S->tol) return FEMLOD_REJECT_TOLERANCE;
+    if (S->lim_on && fl_quadric_eval2(qi, qj, p) > S->lim_tol) return FEMLOD_REJECT_TOLERANCE;
     double stsum = 0.0, stmin = 2.0;
     size_t rmin = 0;
     for (size_t r = 0; r < R->n; r++) {
@@ -492,7 +492,7 @@ double fl_simp_bound_edge(simp *S, ring *R, uint32_t e, uint32_t k) {
     int alltol = 1, w = NO_REASON;
     for (int c = 0; c < R->ncand; c++) {
         const double *p = R->cand[c];
-        if (S->tol_on && fl_quadric_eval2(qi, qj, p) > S->tol) {
+        if (S->lim_on && fl_quadric_eval2(qi, qj, p) > S->lim_tol) {
             w = FEMLOD_REJECT_TOLERANCE;
             continue;
         }

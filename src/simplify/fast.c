@@ -354,6 +354,33 @@ static void par_eval_chunk(void *arg, int worker, size_t k) {
     }
 }
 
+/* Every live edge evaluated (its key), in parallel chunks, each vertex's
+ * best key and the best of all into *top; 0 on ENOMEM. At the start of
+ * the passes, and again when error_order's cap rises. */
+static int band_eval_all(simp *S, par_ctx *X, float *top) {
+    for (size_t v = 0; v < S->nv; v++) S->vbest[v] = -1.0f;
+    for (int t = 0; t < X->nw; t++) {
+        fl_simp_view(&X->wk[t], S);
+        memset(X->wk[t].rejected, 0, sizeof X->wk[t].rejected);
+    }
+    fl_pool_for(X->nw, (S->ne + PAR_CHUNK - 1) / PAR_CHUNK, par_eval_chunk, X, STAT_WAIT(S));
+    for (int t = 0; t < X->nw; t++) {
+        const simp *W = &X->wk[t];
+        if (W->oom) return 0;
+        for (int r = 0; r < FEMLOD_REJECT_COUNT; r++) S->rejected[r] += W->rejected[r];
+    }
+    *top = -1.0f;
+    for (size_t ed = 0; ed < S->ne; ed++) {
+        S->edge[ed].state &= (uint8_t)~E_STALE; /* every key is fresh */
+        float key = S->edge[ed].key;
+        uint32_t a = S->edge[ed].v[0], b = S->edge[ed].v[1];
+        if (key > S->vbest[a]) S->vbest[a] = key;
+        if (key > S->vbest[b]) S->vbest[b] = key;
+        if (key > *top) *top = key;
+    }
+    return 1;
+}
+
 /* One task: slab t's vertices of the stage list, in order. */
 static void par_run_task(void *arg, int worker, size_t k) {
     par_ctx *X = arg;
@@ -697,7 +724,6 @@ int fl_simp_band_run(simp *S, const femlod_simplify_options *o, size_t floor_liv
     X.wk = fl_calloc((size_t)X.nw, sizeof *X.wk);
     if (!X.wk) return 0;
     int ret = 0;
-    for (size_t v = 0; v < S->nv; v++) S->vbest[v] = -1.0f;
 #if FEMLOD_SIMPLIFY_STATS
     double t2 = now_seconds();
 #endif
@@ -706,21 +732,8 @@ int fl_simp_band_run(simp *S, const femlod_simplify_options *o, size_t floor_liv
         ret = 2;
         goto done;
     }
-    for (int t = 0; t < X.nw; t++) fl_simp_view(&X.wk[t], S);
-    fl_pool_for(X.nw, (S->ne + PAR_CHUNK - 1) / PAR_CHUNK, par_eval_chunk, &X, STAT_WAIT(S));
-    for (int t = 0; t < X.nw; t++) {
-        const simp *W = &X.wk[t];
-        if (W->oom) goto done;
-        for (int r = 0; r < FEMLOD_REJECT_COUNT; r++) S->rejected[r] += W->rejected[r];
-    }
     float top = -1.0f;
-    for (size_t ed = 0; ed < S->ne; ed++) {
-        float key = S->edge[ed].key;
-        uint32_t a = S->edge[ed].v[0], b = S->edge[ed].v[1];
-        if (key > S->vbest[a]) S->vbest[a] = key;
-        if (key > S->vbest[b]) S->vbest[b] = key;
-        if (key > top) top = key;
-    }
+    if (!band_eval_all(S, &X, &top)) goto done;
     double tau = (double)top * FEMLOD_SIMPLIFY_BAND;
     STAT_TIME(2, t2);
 #if FEMLOD_SIMPLIFY_STATS
@@ -779,6 +792,11 @@ int fl_simp_band_run(simp *S, const femlod_simplify_options *o, size_t floor_liv
         if (done) {
             tau *= FEMLOD_SIMPLIFY_BAND;
             top = 0.0f; /* keys changed: go on */
+        } else if (top < 0.0f && fl_simp_raise_cap(S)) {
+            /* no valid edge under error_order's cap: the next cap, every
+             * edge evaluated again, bands from its best key */
+            if (!band_eval_all(S, &X, &top)) goto done;
+            tau = (double)top * FEMLOD_SIMPLIFY_BAND;
         } else {
             tau = mn(tau * FEMLOD_SIMPLIFY_BAND, (double)top);
         }

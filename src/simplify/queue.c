@@ -12,6 +12,8 @@
  *                         helper) and applied in list order
  *   fl_simp_evaluate_all  every edge not queued (the start of a phase and
  *                         the final retry), in chunks on the run's threads
+ *   fl_simp_start_cap,    error_order's schedule: C1's cap and the stretch
+ *   fl_simp_raise_cap     floor per phase, the next cap when a round is dry
  *
  * Invariants: the heap holds every eligible edge with its priority (with
  * FEMLOD_SIMPLIFY_BOUND, an upper bound marked E_STALE, settled before
@@ -631,6 +633,45 @@ size_t fl_simp_evaluate_all(simp *S, const femlod_simplify_options *o, double do
         }
     }
     return n;
+}
+
+/* }====== */
+
+/* {====== the error order's schedule (error_order; docs/design.md "An
+ * order that knows the error")
+ *
+ * C1's limit starts at a cap far below the tolerance; the queue (and the
+ * fast passes) take every valid collapse under it in the paper's shape
+ * order, with a stretch floor FEMLOD_SIMPLIFY_CAP_STRETCH in place of
+ * min_stretch; when a round of the queue finds none left, the cap rises by
+ * FEMLOD_SIMPLIFY_CAP_RATE, and once it would reach the tolerance the
+ * schedule ends: the tolerance and min_stretch, the paper's rules, from
+ * there. Each cap is a plain C1 limit, so E_TOLFAIL's rule holds within a
+ * round, and every edge is evaluated again when the cap rises. */
+
+void fl_simp_start_cap(simp *S) {
+    S->lim_on = S->tol_on;
+    S->lim_tol = S->tol;
+    S->lim_st2 = S->phase == 1 && S->st_on ? S->minst2 : -1.0;
+    if (S->phase != 1 || !S->sched || (S->tol_on && S->cap0 >= S->tol)) return;
+    S->lim_on = 1;
+    S->lim_tol = S->cap0;
+    if (S->st_on && FEMLOD_SIMPLIFY_CAP_STRETCH > S->minst)
+        S->lim_st2 = FEMLOD_SIMPLIFY_CAP_STRETCH * FEMLOD_SIMPLIFY_CAP_STRETCH;
+}
+
+int fl_simp_raise_cap(simp *S) {
+    if (S->phase != 1 || !S->sched || !S->lim_on || (S->tol_on && S->lim_tol >= S->tol)) return 0;
+    double c = S->lim_tol * FEMLOD_SIMPLIFY_CAP_RATE;
+    if ((S->tol_on && c >= S->tol) || (!S->tol_on && c > S->cap_end)) {
+        /* the schedule's end: the paper's rules */
+        S->lim_on = S->tol_on;
+        S->lim_tol = S->tol;
+        S->lim_st2 = S->st_on ? S->minst2 : -1.0;
+        return 1;
+    }
+    S->lim_tol = c;
+    return 1;
 }
 
 /* }====== */

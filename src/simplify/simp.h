@@ -52,6 +52,18 @@
 #ifndef FEMLOD_SIMPLIFY_STATS
 #define FEMLOD_SIMPLIFY_STATS 0
 #endif
+/* error_order's schedule (docs/simplify.md "The error order"): the first
+ * cap, times the mean input edge squared; the factor it rises by; the
+ * least stretch of a new triangle while it runs */
+#ifndef FEMLOD_SIMPLIFY_CAP0
+#define FEMLOD_SIMPLIFY_CAP0 1e-6
+#endif
+#ifndef FEMLOD_SIMPLIFY_CAP_RATE
+#define FEMLOD_SIMPLIFY_CAP_RATE 16.0
+#endif
+#ifndef FEMLOD_SIMPLIFY_CAP_STRETCH
+#define FEMLOD_SIMPLIFY_CAP_STRETCH 0.4
+#endif
 
 static inline double now_seconds(void) {
     struct timespec ts;
@@ -188,6 +200,12 @@ typedef struct simp {
     double tol, maxdev, minst, maxsz, feat_angle, feat_w, max_nc;
     int maxval, keep_boundary, area_w;
     int tol_on, dev_on, st_on, sz_on, val_on, cone_on;
+    /* the error order (error_order: queue.c, docs/design.md "An order that
+     * knows the error"): C1's limit in force, the tolerance or the
+     * schedule's cap below it (lim_on 0: none); the first cap and the
+     * largest (without a tolerance) */
+    double lim_tol, cap0, cap_end;
+    int lim_on, sched;
     /* every interior edge's two faces run opposite ways (set-up); collapses
      * keep it. Then each edge at an interior manifold vertex v runs from v
      * in exactly one of v's faces (band_vertex). */
@@ -401,6 +419,13 @@ FL_INTERNAL int fl_simp_band_run(simp *S, const femlod_simplify_options *o, size
 /* Pops edges until the target or an empty queue. 0 on ENOMEM, 2 when
  * cancelled, 1 otherwise. */
 FL_INTERNAL int fl_simp_run_queue(simp *S, const femlod_simplify_options *o, size_t live0, size_t *next);
+/* C1's limit and C2's for the phase S->phase: the tolerance and
+ * min_stretch, or with error_order in phase 1 the schedule's first cap and
+ * its stretch floor. */
+FL_INTERNAL void fl_simp_start_cap(simp *S);
+/* The schedule's next cap (the last: the tolerance, and min_stretch
+ * again); 0 when the schedule is over or off. */
+FL_INTERNAL int fl_simp_raise_cap(simp *S);
 /* Queues every live edge not queued (in the pre-phase: those of a triangle
  * below min_stretch) that has a valid candidate; returns how many. */
 FL_INTERNAL size_t fl_simp_evaluate_all(simp *S, const femlod_simplify_options *o, double done);

@@ -85,6 +85,10 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
     /* C1: the default is scale-aware: docs/simplify.md "Defaults" */
     S->tol_on = o->tolerance >= 0.0;
     S->tol = o->tolerance > 0.0 ? o->tolerance : FEMLOD_SIMPLIFY_DEFAULT_TOLERANCE * mean_edge * mean_edge;
+    /* the error order's schedule (queue.c) */
+    S->sched = o->error_order != 0;
+    S->cap0 = FEMLOD_SIMPLIFY_CAP0 * mean_edge * mean_edge;
+    S->cap_end = 1e6 * diag * diag; /* without a tolerance: past any error a collapse can have */
     S->dev_on = o->max_deviation > 0.0;
     S->maxdev = o->max_deviation;
     S->maxdev2 = S->maxdev * S->maxdev;
@@ -194,7 +198,7 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
 #endif
     if (S->st_on) {
         S->phase = 0;
-        S->lim_st2 = -1.0; /* the pre-phase compares with the replaced faces instead */
+        fl_simp_start_cap(S); /* the tolerance; no C2: the pre-phase compares with the replaced faces */
         size_t queued = fl_simp_evaluate_all(S, o, 0.0);
         if (S->cancelled) {
             *why = FEMLOD_STOP_CANCELLED;
@@ -211,7 +215,7 @@ static int simplify_run(simp *S, const femlod_simplify_options *o, femlod_stop_r
     }
     STAT_TIME(1, t1);
     S->phase = 1;
-    S->lim_st2 = S->st_on ? S->minst2 : -1.0;
+    fl_simp_start_cap(S); /* C1 and C2, or error_order's first cap and floor */
     if (S->fast > 0.0) {
         double fl = S->fast * (double)S->target;
         size_t floor_live = fl < (double)SIZE_MAX ? (size_t)fl : SIZE_MAX;
@@ -244,8 +248,10 @@ static int finish(simp *S, const femlod_simplify_options *o, size_t live0, size_
         if (S->live <= S->target) break;
         /* evaluate everything not queued: at the start, and again when the
          * queue runs dry, for edges refused for reasons outside their ring
-         * (an intersection with a triangle that has moved away since) */
-        if (last_retry == S->collapses) break;
+         * (an intersection with a triangle that has moved away since); a
+         * round without a collapse ends the run, or with error_order raises
+         * the schedule's cap (queue.c) */
+        if (last_retry == S->collapses && !fl_simp_raise_cap(S)) break;
         last_retry = S->collapses;
         size_t goal = live0 > S->prog_target ? live0 - S->prog_target : 1;
         double done = (double)(live0 - S->live) / (double)goal;
@@ -261,7 +267,11 @@ static int finish(simp *S, const femlod_simplify_options *o, size_t live0, size_
         /* nothing newly queued and nothing left in the queue: no valid
          * edge (past the target the queue still holds the edges that were
          * valid when the target was reached) */
-        if (!queued && fl_heap_size(&S->heap) == 0) break;
+        if (!queued && fl_heap_size(&S->heap) == 0) {
+            if (!fl_simp_raise_cap(S)) break;
+            last_retry = (size_t)-1; /* the schedule's next cap: evaluate again */
+            continue;
+        }
         if (S->oom) return 0;
 #if FEMLOD_SIMPLIFY_STATS
         double tq1 = now_seconds();

@@ -1,5 +1,6 @@
 // bench_peers.cpp - femlod_simplify beside its two peers at equal triangle
-// counts (issue 37): meshoptimizer (meshopt_simplify, no error limit) and
+// counts (issue 37), in the paper's order and the error order (each with
+// and without max_deviation): meshoptimizer (meshopt_simplify, no error limit) and
 // OpenMesh's decimater with ModQuadric, ModAspectRatio(5) and
 // ModNormalFlipping. Prints, per tool, the time, femlod's own Hausdorff
 // distance of the output to the input (femlod_mesh_hausdorff), the stretch
@@ -114,12 +115,14 @@ static void run_meshopt(const femlod_mesh *in, size_t target) {
     femlod_mesh_free(out);
 }
 
-/* femlod with its defaults (exact order, one thread), and with max_deviation
- * at rel times the bounding-box diagonal when rel > 0 */
-static void run_femlod(const femlod_mesh *in, size_t target, double rel) {
+/* femlod with its defaults (exact order, one thread), with max_deviation
+ * at rel times the bounding-box diagonal when rel > 0, with error_order
+ * when eorder */
+static void run_femlod(const femlod_mesh *in, size_t target, double rel, int eorder) {
     femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
     o.target = target;
     o.threads = 1;
+    o.error_order = eorder;
     if (rel > 0) {
         double lo[3], hi[3];
         femlod_mesh_bbox(in, lo, hi);
@@ -129,7 +132,9 @@ static void run_femlod(const femlod_mesh *in, size_t target, double rel) {
     femlod_mesh *out = NULL;
     double t0 = now();
     if (femlod_simplify(&out, NULL, in, &o, NULL, NULL) != FEMLOD_OK) return;
-    print_row(rel > 0 ? "femlod, d 1e-3 diag" : "femlod (defaults)", now() - t0, out, in);
+    static const char *const label[2][2] = {{"femlod (defaults)", "femlod, d 1e-3 diag"},
+                                            {"femlod, error order", "femlod, error + d"}};
+    print_row(label[eorder != 0][rel > 0], now() - t0, out, in);
     femlod_mesh_free(out);
 }
 
@@ -159,8 +164,10 @@ int main(int argc, char **argv) {
     std::printf("|---|---|---|---|---|---|---|---|\n");
     for (int a = 3; a < argc; a++) {
         size_t target = (size_t)std::atol(argv[a]);
-        run_femlod(in, target, 0.0);
-        run_femlod(in, target, 1e-3);
+        run_femlod(in, target, 0.0, 0);
+        run_femlod(in, target, 1e-3, 0);
+        run_femlod(in, target, 0.0, 1);
+        run_femlod(in, target, 1e-3, 1);
         run_meshopt(in, target);
         run_openmesh(in, target);
     }

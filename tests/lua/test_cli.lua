@@ -420,6 +420,14 @@ do
   T.check(T.readfile(out2) == T.readfile(out), "flags and name=value give byte-identical output")
   code, text = run("simplify", fandisk, out2, "--target=3000", "--min-stretch=0.3")
   T.check(T.readfile(out2) == T.readfile(out), "--flag=value too")
+  -- --error-order: the Lua option error_order (a different mesh at the same count)
+  local out5, out6 = path("simplified5.obj"), path("simplified6.obj")
+  T.eq(run("simplify", fandisk, out5, "--target", "3000", "--error-order"), 0, "--error-order")
+  T.eq(run("simplify", fandisk, out6, "--target", "3000", "error_order=true"), 0, "error_order=true")
+  T.check(T.readfile(out5) == T.readfile(out6), "--error-order is error_order=true")
+  local out7 = path("simplified7.obj")
+  T.eq(run("simplify", fandisk, out7, "--target", "3000"), 0, "the paper's order")
+  T.check(T.readfile(out5) ~= T.readfile(out7), "--error-order changes the order")
 
   -- off, switches and lock
   local out3 = path("simplified3.stl")
@@ -481,7 +489,7 @@ do
   end
   simplify_usage("femlod: unknown option '--bogus' (valid: --target, --ratio, --tolerance, --max-deviation, "
     .. "--min-stretch, --max-size, --max-valence, --feature-angle, --feature-weight, --max-normal-change, "
-    .. "--keep-boundary, --area-weighted, --fast-above, --threads, --lock, --hierarchy, --hierarchy-floor)", "--bogus")
+    .. "--keep-boundary, --area-weighted, --error-order, --fast-above, --threads, --lock, --hierarchy, --hierarchy-floor)", "--bogus")
   simplify_usage("femlod: --quiet is an option of femlod, not of simplify: put it before the command "
     .. "(femlod --quiet simplify ...)", "--target", "10", "--quiet")
   simplify_usage("femlod: unknown option '--targt'; did you mean --target?", "--targt", "10")
@@ -506,7 +514,7 @@ do
   simplify_usage("femlod: option given twice: 'target'", "--target", "100", "target=200")
   simplify_usage("femlod: unknown parameter 'targt'; did you mean target?", "targt=100")
   simplify_usage("femlod: unknown parameter 'zzz' (valid: target, ratio, tolerance, max_deviation, min_stretch, "
-    .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, fast_above, threads, lock, "
+    .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, error_order, fast_above, threads, lock, "
     .. "hierarchy, hierarchy_floor)",
     "zzz=100")
   simplify_usage("femlod: expected name=value, got '3000'", "--keep-boundary", "3000")
