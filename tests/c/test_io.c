@@ -16,6 +16,7 @@
 #include <errno.h>
 #include <float.h>
 #include <locale.h>
+#include <math.h>
 #include <signal.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -575,6 +576,67 @@ static void test_stl(void) {
     mem_bad("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n",
             FEMLOD_FORMAT_STL, FEMLOD_EPARSE,
             "mem:5: expected 'vertex', found the end of the file");
+}
+
+/* The binary STL reader welds corners straight from its records (io_stl.c
+ * weld_binary); the ASCII reader through fl_mesh_from_soup. The same corners
+ * in both forms must give the same mesh, bit for bit: 3,000 triangles whose
+ * corners are drawn from 6,000 float positions (many recur, near their first
+ * use or far from it, some as -0.0 where another is +0.0), with more than
+ * 4,096 distinct positions, so that the binary reader's table (4,096 slots
+ * for 3,000 triangles, kept at most half full) grows twice. */
+static void test_stl_weld_binary_as_ascii(void) {
+    enum { NT = 3000, NP = 6000 };
+    static float pts[NP][3];
+    for (int i = 0; i < NP; i++)
+        for (int k = 0; k < 3; k++) {
+            uint64_t r = rng();
+            pts[i][k] = (r & 7) == 0 ? 0.0f : (float)((double)(r >> 11) * 0x1p-53 * 200.0 - 100.0);
+        }
+    size_t bsize = 84 + 50 * (size_t)NT, asize = 64 + (size_t)NT * 400;
+    unsigned char *bin = calloc(bsize, 1);
+    char *txt = malloc(asize);
+    CHECK(bin && txt);
+    if (!bin || !txt) {
+        free(bin);
+        free(txt);
+        return;
+    }
+    uint32_t n = NT;
+    memcpy(bin + 80, &n, 4);
+    size_t at = (size_t)snprintf(txt, asize, "solid w\n");
+    for (int t = 0; t < NT; t++) {
+        at += (size_t)snprintf(txt + at, asize - at, "facet normal 0 0 1\nouter loop\n");
+        for (int c = 0; c < 3; c++) {
+            /* half the corners recur near their first use, the rest anywhere */
+            int i = (int)(t % 2 ? rng() % NP : ((uint64_t)t * 3 + (uint64_t)c) % NP);
+            float v[3] = {pts[i][0], pts[i][1], pts[i][2]};
+            for (int k = 0; k < 3; k++)
+                if (v[k] == 0.0f && (rng() & 1)) v[k] = -0.0f;
+            memcpy(bin + 84 + 50 * (size_t)t + 12 + 12 * (size_t)c, v, 12);
+            at += (size_t)snprintf(txt + at, asize - at, "vertex %.17g %.17g %.17g\n", (double)v[0],
+                                   (double)v[1], (double)v[2]);
+        }
+        at += (size_t)snprintf(txt + at, asize - at, "endloop\nendfacet\n");
+    }
+    snprintf(txt + at, asize - at, "endsolid w\n");
+    femlod_mesh *a = mem_ok(txt, FEMLOD_FORMAT_STL_ASCII), *b = NULL;
+    femlod_error err;
+    femlod_read_options o = {FEMLOD_FORMAT_STL_BINARY};
+    CHECK(femlod_mesh_read_memory(&b, bin, bsize, "w.stl", &o, &err) == FEMLOD_OK);
+    CHECK(a && b && a->nt == NT && b->nt == NT && a->nv == b->nv && a->nv > 4096 &&
+          a->nv < 3 * NT);
+    if (a && b && a->nv == b->nv && a->nt == b->nt) {
+        CHECK(memcmp(a->pos, b->pos, 3 * a->nv * sizeof(double)) == 0);
+        CHECK(memcmp(a->tri, b->tri, 3 * a->nt * sizeof(uint32_t)) == 0);
+        int neg_zero = 0;
+        for (size_t i = 0; i < 3 * b->nv; i++) neg_zero += b->pos[i] == 0.0 && signbit(b->pos[i]);
+        CHECK(neg_zero == 0);
+    }
+    femlod_mesh_free(a);
+    femlod_mesh_free(b);
+    free(bin);
+    free(txt);
 }
 
 static void test_off(void) {
@@ -1361,6 +1423,7 @@ int main(void) {
     test_reference_files();
     test_obj();
     test_stl();
+    test_stl_weld_binary_as_ascii();
     test_off();
     test_ply();
     test_bad_files();
