@@ -91,7 +91,7 @@ static int weld_grow(weld_slot **table, size_t *cap) {
 static femlod_status weld_binary(femlod_mesh **out, const unsigned char *data, size_t n,
                                  const char *name, femlod_error *err) {
     size_t cap = 1024;
-    while (cap < n) cap *= 2; /* load about 1/4 for a closed mesh's n / 2 vertices */
+    while (cap < n) cap *= 2; /* a closed mesh's n / 2 vertices fill 1/4 to 1/2 of it */
     weld_slot *table = fl_alloc(cap, sizeof *table);
     weld_slot *cache = fl_alloc(WELD_CACHE, sizeof *cache);
     double *pos = fl_alloc(n ? 3 * n : 1, 3 * sizeof(double)); /* untouched pages stay free */
