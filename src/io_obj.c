@@ -8,6 +8,7 @@
  * PR#6540; never read past the buffer, assimp #4234/#4770). */
 #include "io_util.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -37,6 +38,12 @@ static femlod_status fail(obj_reader *r, femlod_status st, const char *fmt, ...)
 }
 
 static int is_blank(char c) { return c == ' ' || c == '\t' || c == '\v' || c == '\f' || c == '\r'; }
+
+/* The bytes that end a token, or may (a backslash starting a continuation):
+ * blanks, the newline and '\\'; one table look-up a byte in next_token. */
+static const unsigned char token_stop[256] = {
+    ['\t'] = 1, ['\n'] = 1, ['\v'] = 1, ['\f'] = 1, ['\r'] = 1, [' '] = 1, ['\\'] = 1,
+};
 
 /* A backslash followed by blanks and a newline (or the end) joins lines;
  * returns the position after the newline, or NULL when p is no such thing. */
@@ -79,13 +86,26 @@ static void end_statement(obj_reader *r) {
 /* The token at r->p (after skip_blank, not at_eos); advances past it. */
 static const char *next_token(obj_reader *r, size_t *len) {
     const char *s = r->p, *p = s, *end = r->end;
-    while (p < end && !is_blank(*p) && *p != '\n') {
-        if (*p == '\\' && continuation(p, end)) break;
-        p++;
+    for (;;) {
+        while (p < end && !token_stop[(unsigned char)*p]) p++;
+        if (p == end || *p != '\\' || continuation(p, end)) break;
+        p++; /* a backslash inside a token */
     }
     *len = (size_t)(p - s);
     r->p = p;
     return s;
+}
+
+/* Whether a token that started before p ends at p: the end of the data, a
+ * blank, a newline or a line continuation. The fast paths below parse a
+ * number or a vertex reference straight from the buffer and accept it only
+ * when it ends a token; anything else goes through next_token and the
+ * checks that name the problem, so what is accepted and every message stay
+ * as they were. */
+static int at_token_end(const obj_reader *r, const char *p) {
+    if (p == r->end) return 1;
+    if (!token_stop[(unsigned char)*p]) return 0;
+    return *p != '\\' || continuation(p, r->end) != NULL;
 }
 
 /* Skips a statement whose content femlod does not use (continuations included). */
@@ -105,6 +125,15 @@ static femlod_status read_vertex(obj_reader *r) {
     for (int k = 0; k < 3; k++) {
         skip_blank(r);
         if (at_eos(r)) return fail(r, FEMLOD_EPARSE, "vertex has %d coordinates (3 needed)", k);
+        /* Fast path: a finite number that is the whole token (fl_io_coord
+         * parses the token with the same fl_strtod, so the value is the same). */
+        char *e;
+        double x = fl_strtod(r->p, &e);
+        if (e > r->p && at_token_end(r, e) && isfinite(x)) {
+            c[k] = x;
+            r->p = e;
+            continue;
+        }
         size_t n;
         const char *s = next_token(r, &n);
         if (!fl_io_coord(s, n, &c[k], why, sizeof why)) return fail(r, FEMLOD_EPARSE, "%s", why);
@@ -142,24 +171,19 @@ static const char *parse_int(const char *p, const char *e, long long *v) {
     return p;
 }
 
-/* One vertex reference: v, v/vt, v/vt/vn or v//vn. The vt and vn parts are
- * checked for form only: femlod keeps positions only (docs/formats.md). */
-static int parse_ref(const char *s, const char *e, long long *v) {
+/* One vertex reference at s: v, v/vt, v/vt/vn or v//vn; returns the byte
+ * after it (where the grammar stops, which the caller checks is the token's
+ * end), NULL when s starts none. The vt and vn parts are checked for form
+ * only: femlod keeps positions only (docs/formats.md). */
+static const char *parse_ref(const char *s, const char *e, long long *v) {
     long long ignored;
     const char *p = parse_int(s, e, v);
-    if (!p) return 0;
-    if (p == e) return 1;
-    if (*p++ != '/') return 0;
-    if (p < e && *p == '/') { /* v//vn */
-        p = parse_int(p + 1, e, &ignored);
-        return p == e;
-    }
+    if (!p || p == e || *p != '/') return p;
+    p++;
+    if (p < e && *p == '/') return parse_int(p + 1, e, &ignored); /* v//vn */
     p = parse_int(p, e, &ignored);
-    if (!p) return 0;
-    if (p == e) return 1; /* v/vt */
-    if (*p++ != '/') return 0;
-    p = parse_int(p, e, &ignored);
-    return p == e;
+    if (!p || p == e || *p != '/') return p; /* v/vt */
+    return parse_int(p + 1, e, &ignored);
 }
 
 static femlod_status read_face(obj_reader *r) {
@@ -171,10 +195,18 @@ static femlod_status read_face(obj_reader *r) {
         skip_blank(r);
         if (at_eos(r)) break;
         size_t n;
-        const char *s = next_token(r, &n);
+        const char *s = r->p;
         long long idx;
-        if (!parse_ref(s, s + n, &idx))
-            return fail(r, FEMLOD_EPARSE, "bad face vertex '%s'", fl_io_quote(q, sizeof q, s, n));
+        const char *after = parse_ref(s, r->end, &idx);
+        if (after && at_token_end(r, after)) {
+            n = (size_t)(after - s);
+            r->p = after;
+        } else {
+            s = next_token(r, &n);
+            if (parse_ref(s, s + n, &idx) != s + n)
+                return fail(r, FEMLOD_EPARSE, "bad face vertex '%s'",
+                            fl_io_quote(q, sizeof q, s, n));
+        }
         size_t nv = r->b.nv;
         uint32_t v;
         if (idx == 0)

@@ -4,8 +4,9 @@
  * Binary or ASCII is decided by the size arithmetic first (84 + 50 n bytes),
  * the "solid" prefix second: SolidWorks and others write binary files whose
  * 80-byte header starts with "solid" (meshio#530, sreiter/stl_reader#3).
- * STL shares no vertices, so corners are welded by fl_mesh_from_soup
- * (positions that compare equal become one vertex). */
+ * STL shares no vertices, so corners are welded (positions that compare
+ * equal become one vertex): binary records straight from the file by
+ * weld_binary, ASCII corners by fl_mesh_from_soup, in the same order. */
 #include "io_util.h"
 
 #include <math.h>
@@ -40,6 +41,138 @@ static float get_f32le(const unsigned char *p) {
 
 /* {====== binary */
 
+/* A welded position: the corner's float bits (-0 made +0) and its vertex. */
+typedef struct weld_slot {
+    uint32_t bits[3];
+    uint32_t id; /* UINT32_MAX: empty */
+} weld_slot;
+
+/* Slots of the small direct-mapped cache in front of the table: a vertex
+ * recurs in nearby records (about 6 times in a closed mesh), and a hit
+ * there spares the table's cache miss. It holds copies of table slots, so
+ * a hit gives the table's answer. */
+enum { WELD_CACHE = 1 << 14 }; /* indexed by the hash's top 14 bits */
+
+static uint32_t weld_hash(const uint32_t b[3]) {
+    uint64_t h = ((uint64_t)b[0] << 32 | b[1]) * 0x9E3779B97F4A7C15ull;
+    h ^= (uint64_t)b[2] * 0xFF51AFD7ED558CCDull;
+    h ^= h >> 29;
+    h *= 0xC4CEB9FE1A85EC53ull;
+    return (uint32_t)(h >> 32);
+}
+
+/* Doubles the table (load kept at most 1/2); 0 when out of memory. */
+static int weld_grow(weld_slot **table, size_t *cap) {
+    size_t ncap = 2 * *cap;
+    weld_slot *t = fl_alloc(ncap, sizeof *t);
+    if (!t) return 0;
+    for (size_t i = 0; i < ncap; i++) t[i].id = UINT32_MAX;
+    for (size_t i = 0; i < *cap; i++) {
+        const weld_slot *e = &(*table)[i];
+        if (e->id == UINT32_MAX) continue;
+        size_t slot = weld_hash(e->bits) & (ncap - 1);
+        while (t[slot].id != UINT32_MAX) slot = (slot + 1) & (ncap - 1);
+        t[slot] = *e;
+    }
+    free(*table);
+    *table = t;
+    *cap = ncap;
+    return 1;
+}
+
+/* Welds the corners of n records straight from the file: corners with equal
+ * coordinates become one vertex, numbered in order of first appearance, as
+ * fl_mesh_from_soup numbers them (equal floats are equal doubles), without
+ * its array of 9 doubles per triangle. The table holds the float bits, so a
+ * probe reads one slot, not the position array, and grows with the vertices
+ * found (a closed mesh has about half as many vertices as triangles). The
+ * first non-finite coordinate in file order is the error. Deterministic:
+ * the numbering depends only on the order of the records. */
+static femlod_status weld_binary(femlod_mesh **out, const unsigned char *data, size_t n,
+                                 const char *name, femlod_error *err) {
+    size_t cap = 1024;
+    while (cap < n) cap *= 2; /* a closed mesh's n / 2 vertices fill 1/4 to 1/2 of it */
+    weld_slot *table = fl_alloc(cap, sizeof *table);
+    weld_slot *cache = fl_alloc(WELD_CACHE, sizeof *cache);
+    double *pos = fl_alloc(n ? 3 * n : 1, 3 * sizeof(double)); /* untouched pages stay free */
+    femlod_mesh *m = fl_mesh_alloc(0, n);
+    if (!table || !cache || !pos || !m) {
+        free(table);
+        free(cache);
+        free(pos);
+        femlod_mesh_free(m);
+        return fl_error(err, FEMLOD_ENOMEM, "%s: out of memory for %zu triangles", name, n);
+    }
+    for (size_t i = 0; i < cap; i++) table[i].id = UINT32_MAX;
+    for (size_t i = 0; i < WELD_CACHE; i++) cache[i].id = UINT32_MAX;
+    size_t nv = 0;
+    femlod_status st = FEMLOD_OK;
+    for (size_t t = 0; t < n && st == FEMLOD_OK; t++) {
+        const unsigned char *rec = data + STL_PREFIX + t * STL_RECORD + 12; /* skip the normal */
+        if (nv > UINT32_MAX - 3) {
+            st = fl_error(err, FEMLOD_EINPUT, "%s: too many vertices", name);
+            break;
+        }
+        if (2 * (nv + 3) > cap && !weld_grow(&table, &cap)) {
+            st = fl_error(err, FEMLOD_ENOMEM, "%s: out of memory for %zu triangles", name, n);
+            break;
+        }
+        for (int c = 0; c < 3; c++) {
+            uint32_t b[3] = {0, 0, 0};
+            for (int k = 0; k < 3; k++) {
+                const unsigned char *at = rec + 12 * c + 4 * k;
+                float f = get_f32le(at);
+                if (!isfinite(f)) {
+                    st = fail_at(err, name, (size_t)(at - data),
+                                 "triangle %zu: coordinate is not finite (%s)", t + 1,
+                                 isnan(f) ? "nan" : "inf");
+                    break;
+                }
+                if (f == 0.0f) f = 0.0f; /* -0 == +0 */
+                memcpy(&b[k], &f, sizeof f);
+            }
+            if (st != FEMLOD_OK) break;
+            uint32_t h = weld_hash(b);
+            weld_slot *near = &cache[h >> 18];
+            if (near->id == UINT32_MAX || near->bits[0] != b[0] || near->bits[1] != b[1] ||
+                near->bits[2] != b[2]) {
+                size_t slot = h & (cap - 1);
+                for (;;) {
+                    weld_slot *e = &table[slot];
+                    if (e->id == UINT32_MAX) {
+                        memcpy(e->bits, b, sizeof b);
+                        e->id = (uint32_t)nv;
+                        for (int k = 0; k < 3; k++) {
+                            float f;
+                            memcpy(&f, &b[k], sizeof f);
+                            pos[3 * nv + (size_t)k] = f;
+                        }
+                        nv++;
+                        break;
+                    }
+                    if (e->bits[0] == b[0] && e->bits[1] == b[1] && e->bits[2] == b[2]) break;
+                    slot = (slot + 1) & (cap - 1);
+                }
+                *near = table[slot];
+            }
+            m->tri[3 * t + (size_t)c] = near->id;
+        }
+    }
+    free(table);
+    free(cache);
+    if (st != FEMLOD_OK) {
+        free(pos);
+        femlod_mesh_free(m);
+        return st;
+    }
+    double *shrunk = realloc(pos, (nv ? nv : 1) * 3 * sizeof(double));
+    free(m->pos);
+    m->pos = shrunk ? shrunk : pos;
+    m->nv = nv;
+    *out = m;
+    return FEMLOD_OK;
+}
+
 static femlod_status read_binary(femlod_mesh **out, const unsigned char *data, size_t size,
                                  const char *name, femlod_error *err) {
     if (size < STL_PREFIX)
@@ -61,25 +194,7 @@ static femlod_status read_binary(femlod_mesh **out, const unsigned char *data, s
                        "declared %zu triangles, file holds %zu (binary STL is 84 + 50 * n bytes)",
                        n, holds);
     }
-    double *corners = fl_alloc(n, 9 * sizeof(double));
-    if (!corners)
-        return fl_error(err, FEMLOD_ENOMEM, "%s: out of memory for %zu triangles", name, n);
-    for (size_t t = 0; t < n; t++) {
-        const unsigned char *rec = data + STL_PREFIX + t * STL_RECORD + 12; /* skip the normal */
-        for (int k = 0; k < 9; k++) {
-            float f = get_f32le(rec + 4 * k);
-            if (!isfinite(f)) {
-                free(corners);
-                return fail_at(err, name, (size_t)(rec - data) + 4 * (size_t)k,
-                               "triangle %zu: coordinate is not finite (%s)", t + 1,
-                               isnan(f) ? "nan" : "inf");
-            }
-            corners[9 * t + (size_t)k] = f;
-        }
-    }
-    femlod_status st = fl_mesh_from_soup(out, corners, n, err);
-    free(corners);
-    return st;
+    return weld_binary(out, data, n, name, err);
 }
 
 /* }====== */

@@ -16,6 +16,7 @@
 #include <errno.h>
 #include <float.h>
 #include <locale.h>
+#include <math.h>
 #include <signal.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -435,6 +436,85 @@ static void test_reference_files(void) {
 
 /* {====== good inputs, feature by feature */
 
+/* The OBJ reader parses coordinates and vertex references straight from
+ * its buffer when they end a token, and through the token checks otherwise
+ * (io_obj.c at_token_end). Either way a coordinate is strtod's double in
+ * the "C" locale: 2,000 numbers written in ten forms, some lines joined by
+ * a continuation inside them, read back bit for bit; references in all four
+ * forms next to tokens that merely start like one. */
+static void number_form(char *buf, size_t size, int form, double x) {
+    switch (form) {
+    case 0: snprintf(buf, size, "%.17g", x); break;
+    case 1: snprintf(buf, size, "%.6f", x); break;
+    case 2: snprintf(buf, size, "%.9e", x); break;
+    case 3: snprintf(buf, size, "%+.3f", x); break;
+    case 4: snprintf(buf, size, "%.15g", x); break;
+    case 5: snprintf(buf, size, "%.1f", x); break;
+    case 6: snprintf(buf, size, "%.0f.", x); break;
+    case 7: snprintf(buf, size, "%.8E", x); break;
+    case 8: snprintf(buf, size, "%.12g", x); break;
+    default: snprintf(buf, size, "%.20f", x); break;
+    }
+}
+
+static void test_obj_numbers_exact(void) {
+    enum { NV = 2000 };
+    size_t cap = (size_t)NV * 240;
+    char *txt = malloc(cap);
+    static char nums[NV][3][64];
+    CHECK(txt != NULL);
+    if (!txt) return;
+    size_t at = 0;
+    for (int i = 0; i < NV; i++) {
+        at += (size_t)snprintf(txt + at, cap - at, "v");
+        for (int k = 0; k < 3; k++) {
+            uint64_t r = rng();
+            double x = (double)(r >> 11) * 0x1p-53 * 2000.0 - 1000.0;
+            if (r % 17 == 0) x = ldexp(x, (int)(r % 120) - 60);
+            number_form(nums[i][k], sizeof nums[i][k], (int)((r >> 3) % 10), x);
+            if (nums[i][k][0] == '.') nums[i][k][0] = '0'; /* "%.0f." of 0 is "0." */
+            at += (size_t)snprintf(txt + at, cap - at, "%s%s", i % 7 == 3 && k == 2 ? " \\\n " : " ",
+                                   nums[i][k]);
+        }
+        at += (size_t)snprintf(txt + at, cap - at, "\n");
+    }
+    snprintf(txt + at, cap - at, "f 1 2/5 3//7\nf 4/1/2 -1 5/6\n");
+    femlod_mesh *m = mem_ok(txt, FEMLOD_FORMAT_OBJ);
+    CHECK(m && m->nv == NV && m->nt == 2);
+    if (m && m->nv == NV) {
+        int same = 1;
+        for (int i = 0; i < NV; i++)
+            for (int k = 0; k < 3; k++) {
+                double want = strtod(nums[i][k], NULL), got = m->pos[3 * i + k];
+                if (memcmp(&want, &got, sizeof want) != 0) {
+                    if (same) fprintf(stderr, "  %s read as %.17g\n", nums[i][k], got);
+                    same = 0;
+                }
+            }
+        CHECK(same);
+        CHECK(tri_is(m, 0, 0, 1, 2) && tri_is(m, 1, 3, NV - 1, 4));
+    }
+    femlod_mesh_free(m);
+    free(txt);
+    /* Tokens that start like a number or a reference and go on are refused
+     * with the whole token named, as before the fast paths. */
+    mem_bad("v 1 2 3x\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE, "mem:1: bad number '3x'");
+    mem_bad("v 1 2 3\\x 4\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE, "mem:1: bad number '3\\x'");
+    mem_bad("v 1 2 0x1p3\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE, "mem:1: bad number '0x1p3'");
+    mem_bad("v 1 2 1e999\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE,
+            "mem:1: coordinate '1e999' is out of range");
+    mem_bad("v 1 2 nan\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE, "mem:1: coordinate 'nan' is not finite");
+    mem_bad("v 1 2 3#c\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE, "mem:1: bad number '3#c'");
+    mem_bad("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3/\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE,
+            "mem:4: bad face vertex '3/'");
+    mem_bad("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3//\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE,
+            "mem:4: bad face vertex '3//'");
+    mem_bad("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3/4/5/6\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE,
+            "mem:4: bad face vertex '3/4/5/6'");
+    mem_bad("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3a\n", FEMLOD_FORMAT_OBJ, FEMLOD_EPARSE,
+            "mem:4: bad face vertex '3a'");
+}
+
 static void test_obj(void) {
     char p[512];
     femlod_mesh *m =
@@ -575,6 +655,67 @@ static void test_stl(void) {
     mem_bad("solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n",
             FEMLOD_FORMAT_STL, FEMLOD_EPARSE,
             "mem:5: expected 'vertex', found the end of the file");
+}
+
+/* The binary STL reader welds corners straight from its records (io_stl.c
+ * weld_binary); the ASCII reader through fl_mesh_from_soup. The same corners
+ * in both forms must give the same mesh, bit for bit: 3,000 triangles whose
+ * corners are drawn from 6,000 float positions (many recur, near their first
+ * use or far from it, some as -0.0 where another is +0.0), with more than
+ * 4,096 distinct positions, so that the binary reader's table (4,096 slots
+ * for 3,000 triangles, kept at most half full) grows twice. */
+static void test_stl_weld_binary_as_ascii(void) {
+    enum { NT = 3000, NP = 6000 };
+    static float pts[NP][3];
+    for (int i = 0; i < NP; i++)
+        for (int k = 0; k < 3; k++) {
+            uint64_t r = rng();
+            pts[i][k] = (r & 7) == 0 ? 0.0f : (float)((double)(r >> 11) * 0x1p-53 * 200.0 - 100.0);
+        }
+    size_t bsize = 84 + 50 * (size_t)NT, asize = 64 + (size_t)NT * 400;
+    unsigned char *bin = calloc(bsize, 1);
+    char *txt = malloc(asize);
+    CHECK(bin && txt);
+    if (!bin || !txt) {
+        free(bin);
+        free(txt);
+        return;
+    }
+    uint32_t n = NT;
+    memcpy(bin + 80, &n, 4);
+    size_t at = (size_t)snprintf(txt, asize, "solid w\n");
+    for (int t = 0; t < NT; t++) {
+        at += (size_t)snprintf(txt + at, asize - at, "facet normal 0 0 1\nouter loop\n");
+        for (int c = 0; c < 3; c++) {
+            /* half the corners recur near their first use, the rest anywhere */
+            int i = (int)(t % 2 ? rng() % NP : ((uint64_t)t * 3 + (uint64_t)c) % NP);
+            float v[3] = {pts[i][0], pts[i][1], pts[i][2]};
+            for (int k = 0; k < 3; k++)
+                if (v[k] == 0.0f && (rng() & 1)) v[k] = -0.0f;
+            memcpy(bin + 84 + 50 * (size_t)t + 12 + 12 * (size_t)c, v, 12);
+            at += (size_t)snprintf(txt + at, asize - at, "vertex %.17g %.17g %.17g\n", (double)v[0],
+                                   (double)v[1], (double)v[2]);
+        }
+        at += (size_t)snprintf(txt + at, asize - at, "endloop\nendfacet\n");
+    }
+    snprintf(txt + at, asize - at, "endsolid w\n");
+    femlod_mesh *a = mem_ok(txt, FEMLOD_FORMAT_STL_ASCII), *b = NULL;
+    femlod_error err;
+    femlod_read_options o = {FEMLOD_FORMAT_STL_BINARY};
+    CHECK(femlod_mesh_read_memory(&b, bin, bsize, "w.stl", &o, &err) == FEMLOD_OK);
+    CHECK(a && b && a->nt == NT && b->nt == NT && a->nv == b->nv && a->nv > 4096 &&
+          a->nv < 3 * NT);
+    if (a && b && a->nv == b->nv && a->nt == b->nt) {
+        CHECK(memcmp(a->pos, b->pos, 3 * a->nv * sizeof(double)) == 0);
+        CHECK(memcmp(a->tri, b->tri, 3 * a->nt * sizeof(uint32_t)) == 0);
+        int neg_zero = 0;
+        for (size_t i = 0; i < 3 * b->nv; i++) neg_zero += b->pos[i] == 0.0 && signbit(b->pos[i]);
+        CHECK(neg_zero == 0);
+    }
+    femlod_mesh_free(a);
+    femlod_mesh_free(b);
+    free(bin);
+    free(txt);
 }
 
 static void test_off(void) {
@@ -1360,7 +1501,9 @@ int main(void) {
     test_numbers();
     test_reference_files();
     test_obj();
+    test_obj_numbers_exact();
     test_stl();
+    test_stl_weld_binary_as_ascii();
     test_off();
     test_ply();
     test_bad_files();
