@@ -73,9 +73,9 @@ static double box_dist2(const float *b, const double x[3]) {
     return d;
 }
 
-static int leaf_near(const simp *S, const struct dev_tree *t, size_t leaf, const double x[3], double r2) {
+static int leaf_near(simp *S, const struct dev_tree *t, size_t leaf, const double x[3], double r2) {
+    (void)S; /* only the stats build counts */
     size_t lo = leaf * DEV_LEAF, hi = lo + DEV_LEAF < t->nt ? lo + DEV_LEAF : t->nt;
-    (void)S;
     for (size_t f = lo; f < hi; f++) {
         const double *c = t->corner + 9 * f;
         STAT(dev_tris);
