@@ -928,11 +928,12 @@ typedef enum femlod_improve_reason {
     FEMLOD_IMPROVE_TOPOLOGY,      /* every fix breaks the link condition, a feature or a boundary */
     FEMLOD_IMPROVE_INTERSECTION,  /* every fix makes a new self-intersection */
     FEMLOD_IMPROVE_UNTRIED,       /* the rounds ran out before any operator was tried */
+    FEMLOD_IMPROVE_DEPTH,         /* every fix splits an edge cut from an input edge too often */
     FEMLOD_IMPROVE_REASON_COUNT
 } femlod_improve_reason;
 
 /* "corner", "fixed", "deviation", "stretch", "valence", "foldover",
- * "topology", "intersection", "untried". */
+ * "topology", "intersection", "untried", "depth". */
 const char *femlod_improve_reason_name(femlod_improve_reason reason);
 
 typedef struct femlod_improve_report {

@@ -18,7 +18,7 @@
 #define DEFAULT_ROUNDS 20
 
 static const char *const reason_names[FEMLOD_IMPROVE_REASON_COUNT] = {
-    "corner", "fixed", "deviation", "stretch", "valence", "foldover", "topology", "intersection", "untried"};
+    "corner", "fixed", "deviation", "stretch", "valence", "foldover", "topology", "intersection", "untried", "depth"};
 
 const char *femlod_improve_reason_name(femlod_improve_reason reason) {
     if ((int)reason < 0 || reason >= FEMLOD_IMPROVE_REASON_COUNT) return "unknown";
@@ -416,9 +416,13 @@ femlod_status femlod_improve(femlod_mesh **out, const femlod_mesh *mesh, const f
                     else M.freason[f] = (uint8_t)(w + 1);
                 }
             }
-        /* triangles below min_stretch, those made on the way included */
+        /* triangles below min_stretch, those of the round's start: what a
+         * fix makes waits for the next round, so a fix that another undoes
+         * (a cap's split and collapse, then a flip back) costs one try per
+         * round, not an endless chain within one (measured on the engine,
+         * docs/design.md) */
         if (p.st_on)
-            for (uint32_t f = 0; f < M.nt && !R.C.oom; f++)
+            for (uint32_t f = 0, end = (uint32_t)M.nt; f < end && !R.C.oom; f++)
                 if (face_live(&M, f) && im_face_stretch(&M, f) < p.minst) fix_face(&R, f);
         /* vertices above max_valence */
         if (p.val_on)
