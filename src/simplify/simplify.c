@@ -627,6 +627,19 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
             free(lock);
             return st;
         }
+        /* the simplification never goes below min(min_stretch, the input's
+         * least stretch): a stage that went below both (its splits make
+         * triangles worse than the input's worst on the way) is not used */
+        if (rep.stretch_min < rep.stretch_min_in && rep.stretch_min < rep.min_stretch) {
+            femlod_mesh_free(better);
+            better = NULL;
+            free(lock);
+            lock = NULL;
+            so = *o;
+            run = 0;
+        }
+    }
+    if (run) {
         /* a ratio stays the input's: the target is the count asked for */
         if (o->ratio > 0.0) {
             so.ratio = 0.0;
@@ -662,9 +675,13 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
                 femlod_mesh_free(m);
                 return st;
             }
-            femlod_mesh_free(m);
-            m = p;
-            polish = report_ops(&pr);
+            if (pr.stretch_min < pr.stretch_min_in && pr.stretch_min < pr.min_stretch) {
+                femlod_mesh_free(p); /* as before the simplification: never below both */
+            } else {
+                femlod_mesh_free(m);
+                m = p;
+                polish = report_ops(&pr);
+            }
         }
     }
     if (result) {
