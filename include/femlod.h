@@ -715,7 +715,8 @@ typedef double (*femlod_size_fn)(void *payload, const femlod_node_info *node);
 
 /* Local LOD (5.2): splits every front node whose e_size exceeds its
  * threshold (fn(node), or `size` when fn is NULL), then its children, and
- * so on; refine(0) gives back the input mesh. */
+ * so on; refine(0) gives back the input mesh (the improve stage's mesh when
+ * the simplification ran it first: femlod_collapse_log_base). */
 femlod_status femlod_hierarchy_refine(femlod_hierarchy *h, double size, femlod_size_fn fn,
                                       void *payload, size_t *ops, femlod_error *err);
 /* The inverse: collapses a pair whose two children are on the front while
