@@ -508,9 +508,20 @@ typedef struct femlod_simplify_options {
      * 12,000: 0.0090 against 0.68), the stretch somewhat lower. 0 (the
      * default): the paper's order, under the tolerance alone. */
     int error_order;
+    /* 0 (the default): when the input breaks min_stretch, max_valence or a
+     * max_size given, the improvement stage (femlod_improve, with these
+     * thresholds, feature angle, normal change, locks and max_deviation or
+     * its own default) runs first and the simplification starts from its
+     * mesh; the collapse log's node ids 0..V-1 are then that mesh's
+     * vertices (femlod_collapse_log_base), and without a log a short polish
+     * (two rounds of the stage, with its default deviation bound, skipped
+     * when max_deviation is given) runs on the output. Skipped with
+     * keep_boundary. Nonzero: neither runs. An input that breaks no
+     * threshold gives the same output either way. */
+    int no_improve;
 } femlod_simplify_options;
 
-#define FEMLOD_SIMPLIFY_OPTIONS_INIT {0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0, NULL, 0, NULL, NULL, NULL, NULL, 0, 0}
+#define FEMLOD_SIMPLIFY_OPTIONS_INIT {0, 0.0, 0.0, 0.0, 0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, 0, 0.0, 0, NULL, 0, NULL, NULL, NULL, NULL, 0, 0, 0}
 
 typedef enum femlod_stop_reason {
     FEMLOD_STOP_TARGET = 0,        /* the target count was reached */
@@ -569,6 +580,13 @@ typedef struct femlod_simplify_result {
     size_t hierarchy_triangles;
     femlod_stop_reason hierarchy_stop;
     int hierarchy_binding; /* a femlod_reject */
+    /* The improvement stage (options.no_improve): 1 when it ran on the
+     * input; its operations (flips + splits + collapses + relaxations) and
+     * the triangles it handed to the simplification; the polish's
+     * operations on the output; their wall time (within seconds). */
+    int improved;
+    size_t improve_operations, improve_triangles, polish_operations;
+    double improve_seconds;
 } femlod_simplify_result;
 
 /* The collapse log: every collapse in order, in a vertex numbering made for
@@ -597,6 +615,11 @@ typedef struct femlod_collapse {
 
 size_t femlod_collapse_log_count(const femlod_collapse_log *log);
 size_t femlod_collapse_log_input_vertices(const femlod_collapse_log *log);
+/* The mesh whose vertices are nodes 0..V-1 when the simplification ran the
+ * improvement stage on its input first (options.no_improve), owned by the
+ * log; NULL when they are the input's. femlod_hierarchy_create builds on
+ * it. */
+const femlod_mesh *femlod_collapse_log_base(const femlod_collapse_log *log);
 /* Collapses 0..n-1 were the stretch pre-phase. */
 size_t femlod_collapse_log_prephase(const femlod_collapse_log *log);
 /* Collapses 0..n-1 made the simplification's output mesh; the ones after
@@ -701,7 +724,8 @@ typedef double (*femlod_size_fn)(void *payload, const femlod_node_info *node);
 
 /* Local LOD (5.2): splits every front node whose e_size exceeds its
  * threshold (fn(node), or `size` when fn is NULL), then its children, and
- * so on; refine(0) gives back the input mesh. */
+ * so on; refine(0) gives back the input mesh (the improve stage's mesh when
+ * the simplification ran it first: femlod_collapse_log_base). */
 femlod_status femlod_hierarchy_refine(femlod_hierarchy *h, double size, femlod_size_fn fn,
                                       void *payload, size_t *ops, femlod_error *err);
 /* The inverse: collapses a pair whose two children are on the front while
@@ -942,11 +966,12 @@ typedef enum femlod_improve_reason {
     FEMLOD_IMPROVE_TOPOLOGY,      /* every fix breaks the link condition, a feature or a boundary */
     FEMLOD_IMPROVE_INTERSECTION,  /* every fix makes a new self-intersection */
     FEMLOD_IMPROVE_UNTRIED,       /* the rounds ran out before any operator was tried */
+    FEMLOD_IMPROVE_DEPTH,         /* every fix splits an edge cut from an input edge too often */
     FEMLOD_IMPROVE_REASON_COUNT
 } femlod_improve_reason;
 
 /* "corner", "fixed", "deviation", "stretch", "valence", "foldover",
- * "topology", "intersection", "untried". */
+ * "topology", "intersection", "untried", "depth". */
 const char *femlod_improve_reason_name(femlod_improve_reason reason);
 
 typedef struct femlod_improve_report {

@@ -227,6 +227,7 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
                                       const femlod_collapse_log *log,
                                       const femlod_progress_options *options, femlod_error *err) {
     assert(out && mesh && log);
+    if (log->base) mesh = log->base; /* the simplification improved its input first */
     size_t nv = femlod_collapse_log_input_vertices(log), nc = femlod_collapse_log_count(log);
     if (nv != mesh->nv)
         return fl_error(err, FEMLOD_EINPUT,

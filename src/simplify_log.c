@@ -149,12 +149,15 @@ void femlod_collapse_log_free(femlod_collapse_log *log) {
     free(log->face_start);
     free(log->faces);
     free(log->out_nodes);
+    femlod_mesh_free(log->base);
     free(log);
 }
 
 size_t femlod_collapse_log_count(const femlod_collapse_log *log) { return log->n; }
 
 size_t femlod_collapse_log_input_vertices(const femlod_collapse_log *log) { return log->nv_in; }
+
+const femlod_mesh *femlod_collapse_log_base(const femlod_collapse_log *log) { return log->base; }
 
 size_t femlod_collapse_log_prephase(const femlod_collapse_log *log) { return log->prephase; }
 size_t femlod_collapse_log_front(const femlod_collapse_log *log) {

@@ -23,6 +23,7 @@ struct femlod_collapse_log {
     uint8_t *faces;      /* 3 * face_start[n] local refs */
     size_t cap_faces;
     uint32_t *out_nodes; /* node id of each output vertex */
+    femlod_mesh *base;   /* the improved input the node ids 0..nv_in-1 are of; NULL: the input */
     size_t nv_out;
 };
 

@@ -186,9 +186,10 @@ local function stats_of(s, fname)
   return s
 end
 
--- Four lines: why and after how much work it stopped, which checks refused
--- collapses (counts of edge evaluations), the input triangles left breaking
--- a threshold, and the thresholds in force ("off" when switched off, target
+-- Four lines, five when the improve stage ran: why and after how much work
+-- it stopped, what the improve stage did, which checks refused collapses
+-- (counts of edge evaluations), the output triangles left breaking a
+-- threshold, and the thresholds in force ("off" when switched off, target
 -- "none" when there was none).
 function M.stats(s)
   s = stats_of(s, "stats")
@@ -199,17 +200,23 @@ function M.stats(s)
     local off = k == "target" and "none" or "off"
     th[i] = format("%s %s", k, v == false and off or type(v) == "number" and num(v) or "?")
   end
-  return concat({
+  local lines = {
     format("stop: %s; %s (%d in the pre-phase%s) in %.3f s", s.stop_reason,
       plural(s.collapses, "collapse"), s.prephase_collapses,
       (s.fast_collapses or 0) > 0 and format(", %d in fast passes on %s", s.fast_collapses,
         plural(s.threads or 1, "thread")) or "",
       s.seconds),
-    "rejected: " .. concat(rej, ", "),
-    format("violating input: %s; dropped degenerate: %d", plural(s.violating_input, "triangle"),
-      s.dropped_degenerate),
-    "thresholds: " .. concat(th, ", "),
-  }, "\n")
+  }
+  if s.improved then
+    lines[#lines + 1] = format("improve stage first: %s on the input, %s handed on, in %.3f s",
+      plural(s.improve_operations, "operation"), plural(s.improve_triangles, "triangle"),
+      s.improve_seconds)
+  end
+  lines[#lines + 1] = "rejected: " .. concat(rej, ", ")
+  lines[#lines + 1] = format("violating output: %s; dropped degenerate: %d",
+    plural(s.violating_input, "triangle"), s.dropped_degenerate)
+  lines[#lines + 1] = "thresholds: " .. concat(th, ", ")
+  return concat(lines, "\n")
 end
 
 -- }======

@@ -130,6 +130,8 @@ static const page pages[] = {
      "  --keep-boundary  boundary vertices and edges stay\n"
      "  --area-weighted  area-weighted quadrics\n"
      "  --error-order    small quadric errors first (a tolerance schedule)\n"
+     "  --no-improve     do not run the improve stage first on an input that\n"
+     "                   breaks a threshold (femlod help improve)\n"
      "  --lock I,J,K     these vertices of IN keep their exact position (1-based)\n"
      "  --fast-above F|off  fast passes down to F x target (F >= 1)\n"
      "  --threads N      0: all processors (the output does not depend on it)\n"

@@ -92,7 +92,7 @@ static void print_reasons(lua_State *L, int rep, const char *what) {
     /* the names in the core's order, so the output does not depend on hash order */
     lua_pop(L, 1);
     static const char *const names[] = {"corner", "fixed", "deviation", "stretch", "valence", "foldover",
-                                        "topology", "intersection", "untried", NULL};
+                                        "topology", "intersection", "untried", "depth", NULL};
     for (int i = 0; names[i]; i++) {
         lua_getfield(L, -1, names[i]);
         if (!lua_isnil(L, -1)) printf("      %8lld  %s\n", (long long)lua_tointeger(L, -1), names[i]);

@@ -739,7 +739,7 @@ static int cmd_repair(lua_State *L, const cli *c) {
  * error (exit 2) with the same rules as the Lua API.
  * ===================================================================== */
 
-enum { OPT_NUMBER, OPT_THRESHOLD, OPT_SWITCH, OPT_LOCK, OPT_PATH };
+enum { OPT_NUMBER, OPT_THRESHOLD, OPT_SWITCH, OPT_LOCK, OPT_PATH, OPT_SWITCH_OFF };
 
 typedef struct simplify_opt {
     const char *flag, *key;
@@ -760,6 +760,7 @@ static const simplify_opt simplify_opts[] = {
     {"--keep-boundary", "keep_boundary", OPT_SWITCH},
     {"--area-weighted", "area_weighted", OPT_SWITCH},
     {"--error-order", "error_order", OPT_SWITCH},
+    {"--no-improve", "improve", OPT_SWITCH_OFF}, /* the option improve = false */
     {"--fast-above", "fast_above", OPT_THRESHOLD},
     {"--threads", "threads", OPT_NUMBER},
     {"--lock", "lock", OPT_LOCK},
@@ -813,6 +814,12 @@ static int set_simplify_opt(lua_State *L, int opts, int spell, const simplify_op
     lua_pushstring(L, name);
     lua_setfield(L, spell, o->key);
     switch (o->kind) {
+    case OPT_SWITCH_OFF: /* --no-X: X = false; X=true|false as a switch */
+        if (!value) {
+            lua_pushboolean(L, 0);
+            break;
+        }
+        /* fall through */
     case OPT_SWITCH:
         if (!value || strcmp(value, "true") == 0)
             lua_pushboolean(L, 1);
@@ -877,8 +884,9 @@ static int simplify_options(lua_State *L, const cli *c) {
             name = lua_pushlstring(L, a, len); /* popped at the end of the iteration */
             if (eq) {
                 value = eq + 1;
-                if (o->kind == OPT_SWITCH) return fl_cli_usage_error("%s takes no value", name);
-            } else if (o->kind != OPT_SWITCH) {
+                if (o->kind == OPT_SWITCH || o->kind == OPT_SWITCH_OFF)
+                    return fl_cli_usage_error("%s takes no value", name);
+            } else if (o->kind != OPT_SWITCH && o->kind != OPT_SWITCH_OFF) {
                 if (i + 1 >= c->argc) return fl_cli_usage_error("%s needs a value", name);
                 value = c->argv[++i];
             }

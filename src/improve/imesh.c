@@ -342,6 +342,10 @@ uint32_t fl_imesh_add_vertex(imesh *M, const double p[3], uint8_t cls) {
         uint32_t *vo = fl_realloc(M->vorig, 2 * (c - M->nv0), sizeof *vo);
         if (!vo) return IM_DEAD;
         M->vorig = vo;
+        uint8_t *vd = fl_realloc(M->vdepth, c, 1);
+        if (!vd) return IM_DEAD;
+        memset(vd + M->capv, 0, c - M->capv);
+        M->vdepth = vd;
         uint32_t *vm = fl_realloc(M->vmark, c, sizeof *vm);
         if (!vm) return IM_DEAD;
         memset(vm + M->capv, 0, (c - M->capv) * sizeof *vm);
@@ -429,6 +433,7 @@ int fl_imesh_init(imesh *M, const femlod_mesh *m, double feature_angle, const ui
     M->vclass = fl_calloc(M->capv, 1);
     M->vf = fl_calloc(M->capv, sizeof *M->vf);
     M->vmark = fl_calloc(M->capv, sizeof *M->vmark);
+    M->vdepth = fl_calloc(M->capv, 1);
     M->nv0 = m->nv;
     M->vorig = fl_alloc(2 * (M->capv - M->nv0), sizeof *M->vorig);
     M->tri = fl_alloc(3 * M->capt, sizeof *M->tri);
@@ -437,7 +442,7 @@ int fl_imesh_init(imesh *M, const femlod_mesh *m, double feature_angle, const ui
     M->fecap = 1024;
     while (M->fecap < 2 * m->nt) M->fecap *= 2;
     M->fe = fl_calloc(M->fecap, sizeof *M->fe);
-    if (!M->pos || !M->vclass || !M->vf || !M->vmark || !M->vorig || !M->tri || !M->freason || !M->fmark || !M->fe)
+    if (!M->pos || !M->vclass || !M->vf || !M->vmark || !M->vdepth || !M->vorig || !M->tri || !M->freason || !M->fmark || !M->fe)
         return 0;
     if (m->nv) memcpy(M->pos, m->pos, 3 * m->nv * sizeof *M->pos);
     M->nv = m->nv;
@@ -472,6 +477,7 @@ void fl_imesh_free(imesh *M) {
     free(M->vclass);
     free(M->vmark);
     free(M->vorig);
+    free(M->vdepth);
     free(M->tri);
     free(M->freason);
     free(M->fmark);

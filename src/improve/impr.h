@@ -25,6 +25,14 @@
 
 #define IM_DEAD UINT32_MAX
 
+/* The longest chain of splits: a split's vertex has depth 1 + the larger
+ * depth of the edge's ends (the input's have 0), and no split makes a
+ * vertex deeper than this. Halving the pieces of a piece stops after this
+ * many cuts (a needle halved this often keeps 1/4096 of its aspect), so a
+ * region the operators cannot settle (a fix and its undoing, round after
+ * round) grows by a bounded amount, not without end. */
+#define IM_MAX_DEPTH 12
+
 /* vertex classes */
 enum { IM_FREE = 0, IM_LINE = 1, IM_FIXED = 2 };
 
@@ -87,6 +95,7 @@ typedef struct imesh {
     size_t nv, capv, nv0; /* nv0: the input's vertices */
     double *pos;
     uint32_t *vorig; /* per vertex from nv0 on: the ends of the edge its split cut */
+    uint8_t *vdepth; /* per vertex: 0 for the input's, 1 + the larger of the split edge's ends' */
     uint8_t *vclass;
     im_list *vf;
     uint32_t *vmark;

@@ -5,6 +5,7 @@
  * of what remains and why, the output.
  */
 #include "impr.h"
+#include "../improve.h"
 
 #include <stdlib.h>
 #include <string.h>
@@ -18,7 +19,7 @@
 #define DEFAULT_ROUNDS 20
 
 static const char *const reason_names[FEMLOD_IMPROVE_REASON_COUNT] = {
-    "corner", "fixed", "deviation", "stretch", "valence", "foldover", "topology", "intersection", "untried"};
+    "corner", "fixed", "deviation", "stretch", "valence", "foldover", "topology", "intersection", "untried", "depth"};
 
 const char *femlod_improve_reason_name(femlod_improve_reason reason) {
     if ((int)reason < 0 || reason >= FEMLOD_IMPROVE_REASON_COUNT) return "unknown";
@@ -229,11 +230,12 @@ static int fix_valence(run *R, uint32_t v) {
     return changed;
 }
 
-static femlod_status make_output(femlod_mesh **out, imesh *M, femlod_error *err) {
+static femlod_status make_output(femlod_mesh **out, imesh *M, uint32_t *vmap, femlod_error *err) {
     uint32_t *map = fl_alloc(M->nv ? M->nv : 1, sizeof *map);
     if (!map) return fl_error(err, FEMLOD_ENOMEM, "improve: out of memory");
     size_t nv = 0;
     for (size_t v = 0; v < M->nv; v++) map[v] = M->vf[v].n ? (uint32_t)nv++ : IM_DEAD;
+    if (vmap) memcpy(vmap, map, M->nv0 * sizeof *vmap);
     femlod_mesh *m = fl_mesh_alloc(nv, M->live);
     if (!m) {
         free(map);
@@ -315,6 +317,11 @@ static void final_census(run *R, femlod_improve_report *rep) {
 
 femlod_status femlod_improve(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
                              femlod_improve_report *report, femlod_error *err) {
+    return fl_improve_mapped(out, mesh, options, report, NULL, err);
+}
+
+femlod_status fl_improve_mapped(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
+                                femlod_improve_report *report, uint32_t *vmap, femlod_error *err) {
     double t0 = wall();
     femlod_improve_options o = FEMLOD_IMPROVE_OPTIONS_INIT;
     if (options) o = *options;
@@ -416,9 +423,13 @@ femlod_status femlod_improve(femlod_mesh **out, const femlod_mesh *mesh, const f
                     else M.freason[f] = (uint8_t)(w + 1);
                 }
             }
-        /* triangles below min_stretch, those made on the way included */
+        /* triangles below min_stretch, those of the round's start: what a
+         * fix makes waits for the next round, so a fix that another undoes
+         * (a cap's split and collapse, then a flip back) costs one try per
+         * round, not an endless chain within one (measured on the engine,
+         * docs/design.md) */
         if (p.st_on)
-            for (uint32_t f = 0; f < M.nt && !R.C.oom; f++)
+            for (uint32_t f = 0, end = (uint32_t)M.nt; f < end && !R.C.oom; f++)
                 if (face_live(&M, f) && im_face_stretch(&M, f) < p.minst) fix_face(&R, f);
         /* vertices above max_valence */
         if (p.val_on)
@@ -447,7 +458,7 @@ femlod_status femlod_improve(femlod_mesh **out, const femlod_mesh *mesh, const f
     if (ok) {
         fl_progress_end(&prog);
         final_census(&R, &rep);
-        st = make_output(out, &M, err);
+        st = make_output(out, &M, vmap, err);
     } else
         st = fl_error(err, FEMLOD_ENOMEM, "improve: out of memory");
     rep.flips = R.C.flips;

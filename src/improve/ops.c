@@ -73,7 +73,18 @@ static int isect_visit(void *payload, uint32_t g) {
         double lo = fmin(Q[0][k], fmin(Q[1][k], Q[2][k])), hi = fmax(Q[0][k], fmax(Q[1][k], Q[2][k]));
         if (lo > q->hi[k] || hi < q->lo[k]) return 0;
     }
-    return fl_tri_tri_intersect(q->T, q->tid, Q, t, M->eps);
+    if (!fl_tri_tri_intersect(q->T, q->tid, Q, t, M->eps)) return 0;
+    /* a pair is new only when g met none of the faces the change removes:
+     * an assembly's parts that cross in the input stay free to change
+     * where they cross (the count of crossing pairs is measured on the
+     * output by the tests) */
+    const change *ch = q->ch;
+    for (size_t i = 0; i < ch->nrm; i++) {
+        const uint32_t *r = M->tri + 3 * (size_t)ch->rm[i];
+        const double *R[3] = {im_P(M, r[0]), im_P(M, r[1]), im_P(M, r[2])};
+        if (fl_tri_tri_intersect(R, r, Q, t, M->eps)) return 0;
+    }
+    return 1;
 }
 
 /* the first failing check (a femlod_improve_reason), or -1 */
@@ -271,6 +282,11 @@ int fl_imop_split(im_ctx *C, uint32_t a, uint32_t b, const double *at, int *why)
     *why = FEMLOD_IMPROVE_TOPOLOGY;
     size_t n = fl_imesh_edge_faces(M, a, b, ef, 3);
     if (n < 1 || n > 2) return 0;
+    unsigned depth = 1u + (M->vdepth[a] > M->vdepth[b] ? M->vdepth[a] : M->vdepth[b]);
+    if (depth > IM_MAX_DEPTH) {
+        *why = FEMLOD_IMPROVE_DEPTH;
+        return 0;
+    }
     int feat = fl_imesh_is_feature(M, a, b);
     change ch;
     ch.mv = (uint32_t)M->nv; /* the new vertex's index once made */
@@ -335,6 +351,7 @@ int fl_imop_split(im_ctx *C, uint32_t a, uint32_t b, const double *at, int *why)
     }
     M->vorig[2 * (m - M->nv0)] = a;
     M->vorig[2 * (m - M->nv0) + 1] = b;
+    M->vdepth[m] = (uint8_t)depth;
     if (!commit(C, &ch)) return 0;
     if (feat) {
         fl_imesh_set_feature(M, a, b, 0);

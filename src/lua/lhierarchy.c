@@ -52,7 +52,7 @@ static const char *const simplify_keys[] = {
     "min_stretch",    "max_size",       "max_valence",       "feature_angle",
     "feature_weight", "max_normal_change", "keep_boundary",  "area_weighted",
     "error_order",    "fast_above",        "threads",        "lock",
-    "progress",       "hierarchy_floor",   NULL};
+    "progress",       "hierarchy_floor",   "improve",        NULL};
 
 /* The thresholds of type double that `false` switches off, in the order of
  * femlod_simplify_options; max is the largest value allowed. */
@@ -185,15 +185,16 @@ const char *fl_simplify_read_options(lua_State *L, int idx, femlod_simplify_opti
     }
     lua_pop(L, 1);
 
-    static const char *const flags[] = {"keep_boundary", "area_weighted", "error_order"};
-    for (int k = 0; k < 3; k++) {
+    static const char *const flags[] = {"keep_boundary", "area_weighted", "error_order", "improve"};
+    for (int k = 0; k < 4; k++) {
         *key = flags[k];
         t = lua_getfield(L, idx, flags[k]);
         if (t != LUA_TNIL && t != LUA_TBOOLEAN) return bad_value(L, "boolean", NULL);
         int on = lua_toboolean(L, -1);
         if (k == 0) o->keep_boundary = on;
         else if (k == 1) o->area_weighted = on;
-        else o->error_order = on;
+        else if (k == 2) o->error_order = on;
+        else o->no_improve = t == LUA_TBOOLEAN && !on; /* nil: the default, on */
         lua_pop(L, 1);
     }
     *key = NULL;
@@ -1240,6 +1241,12 @@ static int hierarchy_stats(lua_State *L) {
     lua_setfield(L, -2, "rejected");
     set_integer(L, "violating_input", r->violating_input);
     set_integer(L, "dropped_degenerate", r->dropped_degenerate);
+    lua_pushboolean(L, r->improved);
+    lua_setfield(L, -2, "improved");
+    set_integer(L, "improve_operations", r->improve_operations);
+    set_integer(L, "improve_triangles", r->improve_triangles);
+    lua_pushnumber(L, r->improve_seconds);
+    lua_setfield(L, -2, "improve_seconds");
     set_integer(L, "hierarchy_triangles", r->hierarchy_triangles);
     lua_pushstring(L, femlod_stop_reason_name(r->hierarchy_stop));
     lua_setfield(L, -2, "hierarchy_stop");

@@ -31,6 +31,7 @@
  * FEMLOD_OK and says why; every failure frees what the run made.
  */
 #include "simp.h"
+#include "../improve.h"
 
 #include <assert.h>
 #if defined(__GLIBC__)
@@ -409,10 +410,9 @@ static void release_freed_memory(size_t triangles) {
 #endif
 }
 
-femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, const femlod_mesh *mesh,
-                              const femlod_simplify_options *options, femlod_simplify_result *result,
-                              femlod_error *err) {
-    assert(out && mesh); /* femlod.h: NULL handles are programming errors */
+static femlod_status simplify_core(femlod_mesh **out, femlod_collapse_log **out_log, const femlod_mesh *mesh,
+                                   const femlod_simplify_options *options, femlod_simplify_result *result,
+                                   femlod_error *err) {
     double t0 = now_seconds();
     femlod_simplify_options defaults = FEMLOD_SIMPLIFY_OPTIONS_INIT;
     const femlod_simplify_options *o = options ? options : &defaults;
@@ -537,6 +537,184 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
     simp_free(S);
     free(S);
     release_freed_memory(big);
+    return FEMLOD_OK;
+}
+
+/* {====== the improvement stage around the simplification */
+
+/* 1 when the mesh breaks a threshold the stage raises: a triangle below
+ * min_stretch or above a max_size given, a vertex above max_valence.
+ * Triangles with a repeated corner do not count: both stages drop them. One
+ * pass over the triangles and one over the vertices. */
+static int breaks_threshold(const femlod_mesh *m, const femlod_simplify_options *o, femlod_status *st,
+                            femlod_error *err) {
+    double minst = o->min_stretch < 0.0 ? -1.0 : (o->min_stretch > 0.0 ? o->min_stretch : 0.2);
+    double maxsz = o->max_size > 0.0 ? o->max_size : -1.0;
+    for (size_t f = 0; f < m->nt; f++) {
+        const uint32_t *t = m->tri + 3 * f;
+        if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) continue;
+        double sz;
+        double s = tri_stretch(m->pos + 3 * (size_t)t[0], m->pos + 3 * (size_t)t[1], m->pos + 3 * (size_t)t[2], &sz);
+        if ((minst > 0.0 && s < minst) || (maxsz > 0.0 && sz > maxsz)) return 1;
+    }
+    if (o->max_valence < 0) return 0;
+    uint32_t maxval = o->max_valence > 0 ? (uint32_t)o->max_valence : 12;
+    uint32_t *val = fl_alloc(m->nv ? m->nv : 1, sizeof *val);
+    if (!val) {
+        *st = fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+        return 0;
+    }
+    *st = femlod_valence_array(val, m->nv, m->tri, m->nt, err);
+    int bad = 0;
+    for (size_t v = 0; *st == FEMLOD_OK && v < m->nv && !bad; v++) bad = val[v] > maxval;
+    free(val);
+    return bad;
+}
+
+/* The stage's options from the simplification's: the same thresholds,
+ * features, normal change and locks. */
+static femlod_improve_options improve_options(const femlod_simplify_options *o, int rounds) {
+    femlod_improve_options io = FEMLOD_IMPROVE_OPTIONS_INIT;
+    io.min_stretch = o->min_stretch;
+    io.max_size = o->max_size > 0.0 ? o->max_size : 0.0;
+    io.max_valence = o->max_valence;
+    io.max_deviation = o->max_deviation > 0.0 ? o->max_deviation : 0.0;
+    io.feature_angle = o->feature_angle;
+    io.max_normal_change = o->max_normal_change;
+    io.max_rounds = rounds;
+    io.lock = o->lock;
+    io.lock_count = o->lock_count;
+    io.lock_fn = o->lock_fn;
+    io.lock_payload = o->lock_payload;
+    return io;
+}
+
+static size_t report_ops(const femlod_improve_report *r) {
+    return r->flips + r->splits + r->collapses + r->relaxations;
+}
+
+/* Before: the stage on an input that breaks a threshold (the log's base,
+ * locks carried over by the stage's vertex map). After, without a log and
+ * without max_deviation: a polish of two rounds on the output (docs/design.md
+ * "The improvement stage inside simplify" says why not with a log). */
+femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, const femlod_mesh *mesh,
+                              const femlod_simplify_options *options, femlod_simplify_result *result,
+                              femlod_error *err) {
+    assert(out && mesh); /* femlod.h: NULL handles are programming errors */
+    double t0 = now_seconds();
+    femlod_simplify_options defaults = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    const femlod_simplify_options *o = options ? options : &defaults;
+    femlod_status st = FEMLOD_OK;
+    int run = !o->no_improve && !o->keep_boundary && breaks_threshold(mesh, o, &st, err);
+    if (st != FEMLOD_OK) return st;
+    int polish_on = !o->no_improve && !o->keep_boundary && !out_log && o->max_deviation <= 0.0 && !o->lock_count;
+    if (!run && !polish_on)
+        return simplify_core(out, out_log, mesh, options, result, err);
+    femlod_mesh *better = NULL;
+    femlod_improve_report rep;
+    memset(&rep, 0, sizeof rep);
+    femlod_simplify_options so = *o;
+    uint32_t *lock = NULL;
+    if (run) {
+        for (size_t i = 0; i < o->lock_count; i++)
+            if (o->lock[i] >= mesh->nv)
+                return fl_error(err, FEMLOD_EINPUT, "simplify: lock index %u out of range (%zu vertices)",
+                                (unsigned)o->lock[i], mesh->nv);
+        uint32_t *vmap = fl_alloc(mesh->nv ? mesh->nv : 1, sizeof *vmap);
+        if (!vmap) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+        femlod_improve_options io = improve_options(o, 0);
+        st = fl_improve_mapped(&better, mesh, &io, &rep, vmap, err);
+        if (st == FEMLOD_OK && o->lock_count) {
+            /* a locked vertex is fixed in the stage: it stays */
+            lock = fl_alloc(o->lock_count, sizeof *lock);
+            if (!lock) st = fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+            for (size_t i = 0; lock && i < o->lock_count; i++) lock[i] = vmap[o->lock[i]];
+            so.lock = lock;
+        }
+        free(vmap);
+        if (st != FEMLOD_OK) {
+            femlod_mesh_free(better);
+            free(lock);
+            return st;
+        }
+        /* the simplification never goes below min(min_stretch, the input's
+         * least stretch): a stage that went below both (its splits make
+         * triangles worse than the input's worst on the way) is not used */
+        if (rep.stretch_min < rep.stretch_min_in && rep.stretch_min < rep.min_stretch) {
+            femlod_mesh_free(better);
+            better = NULL;
+            free(lock);
+            lock = NULL;
+            so = *o;
+            run = 0;
+        }
+    }
+    if (run) {
+        /* a ratio stays the input's: the target is the count asked for */
+        if (o->ratio > 0.0) {
+            so.ratio = 0.0;
+            so.target = (size_t)floor(o->ratio * (double)mesh->nt + 0.5);
+            if (so.target == 0) so.target = 1;
+        }
+    }
+    double t1 = now_seconds();
+    femlod_mesh *m = NULL;
+    st = simplify_core(&m, out_log, run ? better : mesh, &so, result, err);
+    free(lock);
+    if (st != FEMLOD_OK) {
+        femlod_mesh_free(better);
+        return st;
+    }
+    if (out_log && run) (*out_log)->base = better;
+    else femlod_mesh_free(better);
+    size_t polish = 0;
+    double t2 = now_seconds();
+    if (polish_on) {
+        /* the polish: the output's own elements that break a threshold */
+        int bad = breaks_threshold(m, o, &st, err);
+        if (st != FEMLOD_OK) {
+            femlod_mesh_free(m);
+            return st;
+        }
+        if (bad) {
+            femlod_improve_options io = improve_options(o, 2);
+            femlod_improve_report pr;
+            femlod_mesh *p = NULL;
+            st = femlod_improve(&p, m, &io, &pr, err);
+            if (st != FEMLOD_OK) {
+                femlod_mesh_free(m);
+                return st;
+            }
+            if (pr.stretch_min < pr.stretch_min_in && pr.stretch_min < pr.min_stretch) {
+                femlod_mesh_free(p); /* as before the simplification: never below both */
+            } else {
+                femlod_mesh_free(m);
+                m = p;
+                polish = report_ops(&pr);
+            }
+        }
+    }
+    if (result) {
+        result->improved = run;
+        result->improve_operations = run ? report_ops(&rep) : 0;
+        result->improve_triangles = run ? rep.triangles : 0;
+        result->polish_operations = polish;
+        result->improve_seconds = (t1 - t0) + (now_seconds() - t2);
+        /* the output's elements that break a threshold, after the polish */
+        size_t bad = 0;
+        for (size_t f = 0; f < m->nt; f++) {
+            const uint32_t *t = m->tri + 3 * f;
+            double sz;
+            double stv = tri_stretch(m->pos + 3 * (size_t)t[0], m->pos + 3 * (size_t)t[1], m->pos + 3 * (size_t)t[2], &sz);
+            if ((result->min_stretch > 0.0 && stv < result->min_stretch) || (result->max_size > 0.0 && sz > result->max_size))
+                bad++;
+        }
+        result->violating_input = bad;
+        result->triangles = m->nt;
+        result->vertices = m->nv;
+        result->seconds = now_seconds() - t0;
+    }
+    *out = m;
     return FEMLOD_OK;
 }
 

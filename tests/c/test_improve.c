@@ -2,7 +2,11 @@
  * place"): on CAD-style tessellations, the spider and the engine, every
  * output element meets the thresholds or is counted in the report with a
  * reason; closed stays closed; no new self-intersecting pair; the distance
- * to the input within max_deviation; the same bytes on a second run. */
+ * to the input within max_deviation; the same bytes on a second run. And
+ * femlod_simplify at ratio 0.3 with the stage on by default (docs/design.md
+ * "The improve stage inside simplify") on the same inputs: the output's
+ * count of triangles below a threshold, valence, closedness, crossings, the
+ * count reached or the stop said. */
 #include "cad_shapes.h"
 #include "check.h"
 #include "core.h"
@@ -11,6 +15,7 @@
 #include "shapes.h"
 
 #include <stdlib.h>
+#include <string.h>
 
 static void path_in(char *buf, size_t n, const char *dir, const char *name) {
     snprintf(buf, n, "%s/%s", dir, name);
@@ -141,26 +146,157 @@ static void run_case(const char *name, const femlod_mesh *m, const femlod_improv
     femlod_mesh_free(out2);
 }
 
+/* The same triangles by position, in any order and rotation (triangles with
+ * a repeated corner left out, as the hierarchy drops them). */
+typedef struct tri9 {
+    double p[9];
+} tri9;
+
+static int cmp_tri9(const void *x, const void *y) {
+    const tri9 *a = x, *b = y;
+    for (int k = 0; k < 9; k++)
+        if (a->p[k] != b->p[k]) return a->p[k] < b->p[k] ? -1 : 1;
+    return 0;
+}
+
+static int cmp_pt(const double *a, const double *b) {
+    for (int k = 0; k < 3; k++)
+        if (a[k] != b[k]) return a[k] < b[k] ? -1 : 1;
+    return 0;
+}
+
+static tri9 *canonical(const femlod_mesh *m, size_t *n) {
+    size_t nt = m->nt, k = 0;
+    tri9 *t = malloc((nt ? nt : 1) * sizeof *t);
+    for (size_t i = 0; i < nt; i++) {
+        const uint32_t *v = m->tri + 3 * i;
+        if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
+        int s = 0;
+        for (int c = 1; c < 3; c++)
+            if (cmp_pt(m->pos + 3 * (size_t)v[c], m->pos + 3 * (size_t)v[s]) < 0) s = c;
+        for (int c = 0; c < 3; c++) memcpy(t[k].p + 3 * c, m->pos + 3 * (size_t)v[(s + c) % 3], 3 * sizeof(double));
+        k++;
+    }
+    qsort(t, k, sizeof *t, cmp_tri9);
+    *n = k;
+    return t;
+}
+
+static int same_triangles(const femlod_mesh *a, const femlod_mesh *b) {
+    size_t na, nb;
+    tri9 *ta = canonical(a, &na), *tb = canonical(b, &nb);
+    int same = na == nb && memcmp(ta, tb, na * sizeof *ta) == 0;
+    free(ta);
+    free(tb);
+    return same;
+}
+
+/* femlod_simplify at ratio 0.3 with the improve stage on (the default):
+ * every output triangle meets min_stretch and max_size or is counted in
+ * violating_input; every vertex within max_valence; closed stays closed;
+ * no more self-intersecting pairs than the input; the count within 2% of
+ * the target or the run says it stopped short (no_valid_edge), and the
+ * same bytes on a second run. */
+static void simplify_case(const char *name, const femlod_mesh *m) {
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.ratio = 0.3;
+    femlod_simplify_result res, res2;
+    femlod_mesh *out = NULL, *out2 = NULL;
+    femlod_error err;
+    femlod_status st = femlod_simplify(&out, NULL, m, &o, &res, &err);
+    CHECK(st == FEMLOD_OK);
+    if (st != FEMLOD_OK) {
+        fprintf(stderr, "%s: %s\n", name, err.message);
+        return;
+    }
+    size_t sti, vali, sto, valo;
+    double stmin_in, stmin_out;
+    uint32_t vmax_in, vmax_out;
+    count_bad(m, res.min_stretch, res.max_valence, &sti, &vali, &stmin_in, &vmax_in);
+    count_bad(out, res.min_stretch, res.max_valence, &sto, &valo, &stmin_out, &vmax_out);
+    size_t big = 0;
+    for (size_t f = 0; f < out->nt; f++) {
+        const uint32_t *t = out->tri + 3 * f;
+        const double *a = out->pos + 3 * (size_t)t[0], *b = out->pos + 3 * (size_t)t[1], *c = out->pos + 3 * (size_t)t[2];
+        if (res.max_size > 0 && femlod_triangle_size(a, b, c) > res.max_size &&
+            !(femlod_triangle_stretch(a, b, c) < res.min_stretch))
+            big++;
+    }
+    /* the honest count: the output's triangles below a threshold */
+    CHECK(res.violating_input == sto + big);
+    CHECK(sto <= sti);
+    CHECK(res.improved == (sti > 0 || vali > 0));
+    CHECK(valo == 0);
+    femlod_topology ti, to;
+    femlod_mesh_topology(m, &ti, NULL);
+    femlod_mesh_topology(out, &to, NULL);
+    CHECK(ti.closed == to.closed);
+    CHECK(!ti.manifold || to.manifold);
+    double eps = 1e-10 * diag_of(m);
+    size_t xi = meshcheck_self_intersections(m, eps), xo = meshcheck_self_intersections(out, eps);
+    CHECK(xo <= xi);
+    int near = (double)out->nt <= 1.02 * (double)res.target;
+    CHECK(near || res.stop_reason == FEMLOD_STOP_NO_VALID_EDGE);
+    /* with a log (no polish then): the hierarchy is built on the stage's
+     * mesh; its first front is the mesh returned and refine(0) gives the
+     * stage's mesh, not the raw input */
+    femlod_collapse_log *log = NULL;
+    femlod_mesh *outl = NULL, *front = NULL, *finest = NULL;
+    femlod_hierarchy *h = NULL;
+    CHECK(femlod_simplify(&outl, &log, m, &o, &res2, NULL) == FEMLOD_OK);
+    const femlod_mesh *base = log ? femlod_collapse_log_base(log) : NULL;
+    CHECK(res2.improved == (base != NULL));
+    if (log && femlod_hierarchy_create(&h, m, log, NULL, NULL) == FEMLOD_OK) {
+        CHECK(femlod_hierarchy_extract(h, &front, NULL, NULL) == FEMLOD_OK);
+        CHECK(front && same_triangles(front, outl));
+        CHECK(femlod_hierarchy_refine(h, 0.0, NULL, NULL, NULL, NULL) == FEMLOD_OK);
+        CHECK(femlod_hierarchy_extract(h, &finest, NULL, NULL) == FEMLOD_OK);
+        CHECK(finest && same_triangles(finest, base ? base : m));
+    } else
+        CHECK(!"hierarchy");
+    femlod_hierarchy_free(h);
+    femlod_mesh_free(front);
+    femlod_mesh_free(finest);
+    femlod_mesh_free(outl);
+    femlod_collapse_log_free(log);
+    CHECK(femlod_simplify(&out2, NULL, m, &o, &res2, NULL) == FEMLOD_OK);
+    CHECK(shape_same_mesh(out, out2));
+    fprintf(stderr,
+            "simplify %-10s tris %zu -> %zu (target %zu, %s)  stretch<%.2g %zu -> %zu (min %.3f -> %.3f)"
+            "  valence>%d %zu -> %zu (max %u -> %u)  self-x %zu -> %zu  improve %zu ops, polish %zu  %.3f s\n",
+            name, m->nt, out->nt, res.target, near ? "reached" : femlod_stop_reason_name(res.stop_reason),
+            res.min_stretch, sti, sto, stmin_in, stmin_out, res.max_valence, vali, valo, vmax_in, vmax_out, xi, xo,
+            res.improve_operations, res.polish_operations, res.seconds);
+    femlod_mesh_free(out);
+    femlod_mesh_free(out2);
+}
+
 static void generated(void) {
     femlod_improve_options o = FEMLOD_IMPROVE_OPTIONS_INIT;
     femlod_mesh *m;
     m = cad_cylinder_fans(48, 2.0);
     run_case("cylinder", m, &o, 0);
+    simplify_case("cylinder", m);
     femlod_mesh_free(m);
     m = cad_cone_fans(48, 1.5);
     run_case("cone", m, &o, 0);
+    simplify_case("cone", m);
     femlod_mesh_free(m);
     m = cad_bracket(12, 1.0);
     run_case("bracket", m, &o, 0);
+    simplify_case("bracket", m);
     femlod_mesh_free(m);
     m = cad_tjoin(24);
     run_case("tjoin", m, &o, 0);
+    simplify_case("tjoin", m);
     femlod_mesh_free(m);
     m = cad_thin_plate(4, 1.0, 1.0 / 16.0);
     run_case("thinplate", m, &o, 0);
+    simplify_case("thinplate", m);
     femlod_mesh_free(m);
     m = cad_holes(16);
     run_case("holes", m, &o, 0);
+    simplify_case("holes", m);
     femlod_mesh_free(m);
 }
 
@@ -204,6 +340,7 @@ static void files(int which) {
         }
         femlod_improve_options o = FEMLOD_IMPROVE_OPTIONS_INIT;
         run_case(i ? "engine" : "spider", m, &o, 0);
+        simplify_case(i ? "engine" : "spider", m);
         femlod_mesh_free(m);
     }
 }
@@ -213,8 +350,8 @@ int main(int argc, char **argv) {
     errors();
     generated();
     /* no argument: the generated cases and the spider; "engine": the
-     * engine as well (minutes: a measurement, not in ctest); "generated":
-     * the generated cases only */
+     * engine as well (about a minute: ctest c_improve_engine, heavy);
+     * "generated": the generated cases only */
     if (argc < 2) files(0);
     else if (strcmp(argv[1], "engine") == 0) files(-1);
     return check_report("test_improve");

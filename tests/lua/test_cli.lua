@@ -404,7 +404,7 @@ do
   T.check(lines[4]:find("^stop: target; %d+ collapses %(0 in the pre%-phase%) in [%d.]+ s$"), "stop line: " .. tostring(lines[4]))
   T.check(lines[5]:find("^rejected: tolerance %d+, deviation 0, stretch %d+, size %d+, valence %d+, foldover %d+, "
     .. "topology %d+, intersection %d+$"), "rejected line: " .. tostring(lines[5]))
-  T.eq(lines[6], "violating input: 0 triangles; dropped degenerate: 0", "violating line")
+  T.eq(lines[6], "violating output: 0 triangles; dropped degenerate: 0", "violating line")
   T.check(lines[7]:find("^thresholds: target 3000, tolerance [%d.e+-]+, max_deviation off, min_stretch 0%.3, "),
     "thresholds line: " .. tostring(lines[7]))
   T.eq(lines[8], out .. ": 3000 triangles, 1502 vertices (obj)", "summary line")
@@ -489,7 +489,7 @@ do
   end
   simplify_usage("femlod: unknown option '--bogus' (valid: --target, --ratio, --tolerance, --max-deviation, "
     .. "--min-stretch, --max-size, --max-valence, --feature-angle, --feature-weight, --max-normal-change, "
-    .. "--keep-boundary, --area-weighted, --error-order, --fast-above, --threads, --lock, --hierarchy, --hierarchy-floor)", "--bogus")
+    .. "--keep-boundary, --area-weighted, --error-order, --no-improve, --fast-above, --threads, --lock, --hierarchy, --hierarchy-floor)", "--bogus")
   simplify_usage("femlod: --quiet is an option of femlod, not of simplify: put it before the command "
     .. "(femlod --quiet simplify ...)", "--target", "10", "--quiet")
   simplify_usage("femlod: unknown option '--targt'; did you mean --target?", "--targt", "10")
@@ -514,7 +514,7 @@ do
   simplify_usage("femlod: option given twice: 'target'", "--target", "100", "target=200")
   simplify_usage("femlod: unknown parameter 'targt'; did you mean target?", "targt=100")
   simplify_usage("femlod: unknown parameter 'zzz' (valid: target, ratio, tolerance, max_deviation, min_stretch, "
-    .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, error_order, fast_above, threads, lock, "
+    .. "max_size, max_valence, feature_angle, feature_weight, max_normal_change, keep_boundary, area_weighted, error_order, improve, fast_above, threads, lock, "
     .. "hierarchy, hierarchy_floor)",
     "zzz=100")
   simplify_usage("femlod: expected name=value, got '3000'", "--keep-boundary", "3000")
