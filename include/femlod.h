@@ -466,7 +466,7 @@ typedef struct femlod_simplify_options {
      * 1.25M-triangle input, average stretch about 0.01-0.02 lower); below
      * F * target the exact order finishes. Without a target, the passes run
      * until no valid edge is left and the exact queue then finishes. 0 (the
-     * default): 2 with error_order (average stretch within 0.01 of the
+     * default): 3 with error_order (average stretch within 0.01 of the
      * exact order's: docs/simplify.md "Fast passes"), the exact order
      * without it; FEMLOD_SIMPLIFY_OFF: the exact order throughout; a value
      * in (0, 1) fails with FEMLOD_EINPUT. */

@@ -131,7 +131,7 @@ static const page pages[] = {
      "  --area-weighted  area-weighted quadrics\n"
      "  --error-order    small quadric errors first (a tolerance schedule)\n"
      "  --lock I,J,K     these vertices of IN keep their exact position (1-based)\n"
-     "  --fast-above F|off  fast passes down to F x target (F >= 1); default 2\n"
+     "  --fast-above F|off  fast passes down to F x target (F >= 1); default 3\n"
      "                   with --error-order, else off (the exact order)\n"
      "  --threads N      0: all processors (the output does not depend on it)\n"
      "  --hierarchy PART.flh  also write the vertex hierarchy, down to the\n"

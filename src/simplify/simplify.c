@@ -45,7 +45,7 @@
 #define FEMLOD_SIMPLIFY_DEFAULT_TOLERANCE 4.0 /* times (mean input edge)^2 */
 #endif
 #ifndef FEMLOD_SIMPLIFY_DEFAULT_FAST
-#define FEMLOD_SIMPLIFY_DEFAULT_FAST 2.0 /* fast_above's default factor */
+#define FEMLOD_SIMPLIFY_DEFAULT_FAST 3.0 /* fast_above's default factor */
 #endif
 #ifndef FEMLOD_SIMPLIFY_GRID_CELL
 #define FEMLOD_SIMPLIFY_GRID_CELL 1.0 /* grid cell edge / mean edge length */

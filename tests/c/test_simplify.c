@@ -493,7 +493,7 @@ static void test_options(void) {
     femlod_mesh_free(out);
     d.error_order = 1; /* the error order: fast passes by default */
     CHECK(femlod_simplify(&out, NULL, m, &d, &r, &err) == FEMLOD_OK);
-    CHECK(r.fast_above == 2.0);
+    CHECK(r.fast_above == 3.0);
     d.error_order = 0;
     femlod_mesh_free(out);
     /* switched off */
@@ -1283,7 +1283,7 @@ static void default_order_case(const char *file, size_t target) {
     char label[64];
     snprintf(label, sizeof label, "%s default %zu", file, target);
     if (simplify_checked(&d, m, &o, label)) {
-        CHECK(d.res.fast_above == 2.0 && d.res.fast_collapses > 0);
+        CHECK(d.res.fast_above == 3.0 && d.res.fast_collapses > 0);
         CHECK(d.res.stop_reason == FEMLOD_STOP_TARGET);
         snprintf(label, sizeof label, "%s exact %zu", file, target);
         if (simplify_checked(&e, m, &x, label)) {
