@@ -465,8 +465,10 @@ typedef struct femlod_simplify_options {
      * (every collapse still meets every threshold; about 2x faster on a
      * 1.25M-triangle input, average stretch about 0.01-0.02 lower); below
      * F * target the exact order finishes. Without a target, the passes run
-     * until no valid edge is left and the exact queue then finishes. 0 or
-     * FEMLOD_SIMPLIFY_OFF: the exact order throughout (the default); a value
+     * until no valid edge is left and the exact queue then finishes. 0 (the
+     * default): 3 with error_order (average stretch within 0.01 of the
+     * exact order's: docs/simplify.md "Fast passes"), the exact order
+     * without it; FEMLOD_SIMPLIFY_OFF: the exact order throughout; a value
      * in (0, 1) fails with FEMLOD_EINPUT. */
     double fast_above;
     /* Threads (docs/design.md "The set-up in parallel parts", "Parallel

@@ -47,6 +47,10 @@
  * neither read a half-written W nor take an entry of a finished list. It
  * lives only while the queue runs. */
 
+#ifndef FEMLOD_SIMPLIFY_QUEUE_HELPER
+#define FEMLOD_SIMPLIFY_QUEUE_HELPER 1 /* 0: the exact queue runs on one thread (experiments) */
+#endif
+
 typedef struct eval_helper {
     simp W; /* its view of the run, refreshed before each list */
     simp *S;
@@ -117,7 +121,7 @@ static void ring_eval(simp *S, size_t n) {
  * evaluates alone; the results are the same). */
 static void helper_start(simp *S) {
     S->helper = NULL;
-    if (S->nthreads < 2) return;
+    if (S->nthreads < 2 || !FEMLOD_SIMPLIFY_QUEUE_HELPER) return;
     eval_helper *h = calloc(1, sizeof *h);
     if (!h) return;
     h->S = S;

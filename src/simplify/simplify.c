@@ -45,6 +45,9 @@
 #ifndef FEMLOD_SIMPLIFY_DEFAULT_TOLERANCE
 #define FEMLOD_SIMPLIFY_DEFAULT_TOLERANCE 4.0 /* times (mean input edge)^2 */
 #endif
+#ifndef FEMLOD_SIMPLIFY_DEFAULT_FAST
+#define FEMLOD_SIMPLIFY_DEFAULT_FAST 3.0 /* fast_above's default factor */
+#endif
 #ifndef FEMLOD_SIMPLIFY_GRID_CELL
 #define FEMLOD_SIMPLIFY_GRID_CELL 1.0 /* grid cell edge / mean edge length */
 #endif
@@ -72,7 +75,6 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
         return fl_error(err, FEMLOD_EINPUT, "simplify: angles are degrees in [0, 180]");
     if (bad_number(o->fast_above) || (o->fast_above > 0.0 && o->fast_above < 1.0))
         return fl_error(err, FEMLOD_EINPUT, "simplify: fast_above %g is not a factor >= 1", o->fast_above);
-    S->fast = o->fast_above >= 1.0 ? o->fast_above : 0.0;
     if (o->threads < 0) return fl_error(err, FEMLOD_EINPUT, "simplify: threads %d is negative", o->threads);
     S->nthreads = o->threads;
     if (S->nthreads == 0) {
@@ -88,6 +90,14 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
     S->tol = o->tolerance > 0.0 ? o->tolerance : FEMLOD_SIMPLIFY_DEFAULT_TOLERANCE * mean_edge * mean_edge;
     /* the error order's schedule (queue.c) */
     S->sched = o->error_order != 0;
+    /* fast_above 0: the default, fast passes at the default factor in the
+     * error order and the exact order in the paper's (where the passes cost
+     * more than 0.01 of average stretch: docs/simplify.md "Fast passes");
+     * off (negative): the exact order throughout */
+    if (o->fast_above >= 1.0)
+        S->fast = o->fast_above;
+    else
+        S->fast = o->fast_above == 0.0 && S->sched ? FEMLOD_SIMPLIFY_DEFAULT_FAST : 0.0;
     S->cap0 = FEMLOD_SIMPLIFY_CAP0 * mean_edge * mean_edge;
     S->cap_end = 1e6 * diag * diag; /* without a tolerance: past any error a collapse can have */
     S->dev_on = o->max_deviation > 0.0;

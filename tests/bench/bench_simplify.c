@@ -173,7 +173,7 @@ int main(int argc, char **argv) {
     /* femlod in its default exact order (its default threads: the queue
      * uses two), with fast passes above twice the target on one thread and
      * on all (options.threads = 0) */
-    const double modes[3] = {0.0, 2.0, 2.0};
+    const double modes[3] = {FEMLOD_SIMPLIFY_OFF, 2.0, 2.0}; /* the exact order, fast passes */
     const int threads[3] = {0, 1, 0};
     const char *const names[3] = {"femlod exact   ", "femlod fast 2/1", "femlod fast 2  "};
     for (int k = 0; k < 2; k++) {

@@ -33,7 +33,7 @@ typedef struct scase {
     double tol, st, sz, dev, nc;
     int val, keep_boundary, area, lock;
     double fangle, fweight;
-    double fast; /* fast_above */
+    double fast; /* fast_above; 0: the exact order (fast_above off) */
 } scase;
 
 static int lock_half(void *payload, double x, double y, double z) {
@@ -122,7 +122,7 @@ int main(int argc, char **argv) {
         if (k->lock) o.lock_fn = lock_half;
         o.feature_angle = k->fangle;
         o.feature_weight = k->fweight;
-        o.fast_above = k->fast;
+        o.fast_above = k->fast > 0.0 ? k->fast : FEMLOD_SIMPLIFY_OFF; /* 0: the exact order */
         o.threads = threads;
         o.hierarchy_floor = floor;
         femlod_mesh *out = NULL;

@@ -75,7 +75,7 @@ static void bound_holds(const char *name, const femlod_mesh *m, size_t target, d
     femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
     o.target = target;
     o.max_deviation = d;
-    o.fast_above = fast ? 2.0 : 0.0;
+    o.fast_above = fast ? 2.0 : FEMLOD_SIMPLIFY_OFF; /* off: the exact order */
     femlod_mesh *out = NULL;
     femlod_simplify_result r;
     femlod_error err;
@@ -129,7 +129,7 @@ static void test_threads(void) {
         femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
         o.target = 1500;
         o.max_deviation = 0.002;
-        o.fast_above = fast ? 2.0 : 0.0;
+        o.fast_above = fast ? 2.0 : FEMLOD_SIMPLIFY_OFF; /* off: the exact order */
         o.threads = 1;
         CHECK(femlod_simplify(&a, NULL, m, &o, NULL, NULL) == FEMLOD_OK);
         o.threads = 2;

@@ -95,7 +95,7 @@ static void test_bound(void) {
             o.target = targets[k];
             o.error_order = 1;
             o.max_deviation = 1e-3 * diagonal(m);
-            o.fast_above = fast ? 2.0 : 0.0;
+            o.fast_above = fast ? 2.0 : FEMLOD_SIMPLIFY_OFF; /* off: the exact order */
             outcome r;
             char label[64];
             snprintf(label, sizeof label, "%s %s, d 1e-3 diag", names[k], fast ? "fast" : "exact");
@@ -186,7 +186,7 @@ static void test_threads(void) {
         femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
         o.target = 1500;
         o.error_order = 1;
-        o.fast_above = fast ? 2.0 : 0.0;
+        o.fast_above = fast ? 2.0 : FEMLOD_SIMPLIFY_OFF; /* off: the exact order */
         o.threads = 1;
         CHECK(femlod_simplify(&a, NULL, m, &o, NULL, NULL) == FEMLOD_OK);
         o.threads = 2;

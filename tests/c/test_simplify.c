@@ -452,6 +452,7 @@ static femlod_simplify_options paper(size_t target) {
     o.min_stretch = 0.2;
     o.max_size = 15.0;
     o.max_valence = 12;
+    o.fast_above = FEMLOD_SIMPLIFY_OFF; /* the exact order: Table 1's figures are the paper's order's */
     return o;
 }
 
@@ -497,7 +498,12 @@ static void test_options(void) {
     CHECK(r.target == 80);
     CHECK(r.min_stretch == 0.2 && r.max_valence == 12 && r.max_size > 0 && r.tolerance > 0);
     CHECK(r.max_deviation < 0);
-    CHECK(r.fast_above < 0 && r.fast_collapses == 0);
+    CHECK(r.fast_above < 0 && r.fast_collapses == 0); /* the paper's order: exact by default */
+    femlod_mesh_free(out);
+    d.error_order = 1; /* the error order: fast passes by default */
+    CHECK(femlod_simplify(&out, NULL, m, &d, &r, &err) == FEMLOD_OK);
+    CHECK(r.fast_above == 3.0);
+    d.error_order = 0;
     femlod_mesh_free(out);
     /* switched off */
     d.min_stretch = FEMLOD_SIMPLIFY_OFF;
@@ -837,7 +843,7 @@ static void max_deviation_cases(const femlod_mesh *m, int fast) {
         o.target = 300;
         o.tolerance = FEMLOD_SIMPLIFY_OFF;
         o.max_deviation = bounds[k];
-        o.fast_above = fast ? 2.0 : 0.0;
+        o.fast_above = fast ? 2.0 : FEMLOD_SIMPLIFY_OFF;
         run r;
         char label[64];
         snprintf(label, sizeof label, "fandisk max_deviation %g%s", bounds[k], fast ? " fast" : "");
@@ -883,7 +889,7 @@ static void lock_case(const femlod_mesh *m, int fast) {
     double ycut = 0.2;
     o.lock_fn = lock_upper;
     o.lock_payload = &ycut;
-    o.fast_above = fast ? 2.0 : 0.0;
+    o.fast_above = fast ? 2.0 : FEMLOD_SIMPLIFY_OFF;
     run r;
     if (simplify_checked(&r, m, &o, fast ? "fandisk lock 64 + y>0.2 fast" : "fandisk lock 64 + y>0.2")) {
         size_t missing = 0, locked = 0;
@@ -963,7 +969,7 @@ static void pierced_case(const femlod_mesh *fine, const double (*tp)[3], size_t 
         femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
         o.target = 400;
         o.max_size = 0.5;
-        o.fast_above = fast ? 2.0 : 0.0;
+        o.fast_above = fast ? 2.0 : FEMLOD_SIMPLIFY_OFF;
         o.threads = 2;
         run r;
         if (simplify_checked(&r, m, &o, fast ? "  fast" : "  exact")) {
@@ -1226,7 +1232,7 @@ static void test_fast_passes(void) {
         CHECK(r.res.fast_collapses > 0 && r.res.fast_collapses <= (m->nt - 4000) / 2 + 1);
         CHECK(r.res.fast_collapses < r.res.collapses);
         femlod_simplify_options x = o;
-        x.fast_above = 0.0;
+        x.fast_above = FEMLOD_SIMPLIFY_OFF; /* the exact order */
         if (simplify_checked(&e, m, &x, "fandisk exact 2000")) {
             printf("  fast %.3f / %.3f, exact %.3f / %.3f (stretch avg / min)\n", r.q.stretch_avg,
                    r.q.stretch_min, e.q.stretch_avg, e.q.stretch_min);
@@ -1268,6 +1274,52 @@ static void test_fast_passes(void) {
         run_free(&r);
     }
     femlod_mesh_free(m);
+}
+
+/* The default order (docs/simplify.md "Fast passes"): fast_above left at 0
+ * runs the fast passes at the default factor, and with the error order its
+ * average stretch at the target stays within 0.01 of the exact order's and
+ * its Hausdorff distance to the input within 1.2 times the exact order's,
+ * every threshold held (simplify_checked) on both. The exact order is asked
+ * for explicitly (fast_above off). */
+static void default_order_case(const char *file, size_t target) {
+    femlod_mesh *m = load(file);
+    if (!m) return;
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = target;
+    o.error_order = 1;
+    femlod_simplify_options x = o;
+    x.fast_above = FEMLOD_SIMPLIFY_OFF; /* the exact order */
+    run d, e;
+    char label[64];
+    snprintf(label, sizeof label, "%s default %zu", file, target);
+    if (simplify_checked(&d, m, &o, label)) {
+        CHECK(d.res.fast_above == 3.0 && d.res.fast_collapses > 0);
+        CHECK(d.res.stop_reason == FEMLOD_STOP_TARGET);
+        snprintf(label, sizeof label, "%s exact %zu", file, target);
+        if (simplify_checked(&e, m, &x, label)) {
+            CHECK(e.res.fast_above < 0 && e.res.fast_collapses == 0);
+            femlod_hausdorff_result hd, he;
+            femlod_error err;
+            CHECK(femlod_mesh_hausdorff(d.out, m, NULL, &hd, &err) == FEMLOD_OK);
+            CHECK(femlod_mesh_hausdorff(e.out, m, NULL, &he, &err) == FEMLOD_OK);
+            printf("  default %.4f / %.4f, exact %.4f / %.4f (stretch avg / hausdorff)\n", d.q.stretch_avg,
+                   hd.distance, e.q.stretch_avg, he.distance);
+            CHECK(d.q.stretch_avg >= e.q.stretch_avg - 0.01);
+            CHECK(hd.distance <= 1.2 * he.distance);
+            CHECK(d.q.stretch_min >= 0.2 && e.q.stretch_min >= 0.2);
+            run_free(&e);
+        }
+        run_free(&d);
+    }
+    femlod_mesh_free(m);
+}
+
+static void test_default_order(void) {
+    default_order_case("fandisk.obj", 2000);
+    if (!heavy()) return;
+    default_order_case("cover.obj", 12000);
+    default_order_case("bunny.obj", 5000);
 }
 
 /* Threads (docs/design.md "Parallel fast passes", "The exact queue's second
@@ -1320,7 +1372,7 @@ static void test_threads(void) {
     o.max_deviation = 0.003;
     o.lock_fn = lock_left;
     threads_case(m, o, "fandisk fast 1000, max_deviation and locks");
-    o.fast_above = 0.0;
+    o.fast_above = FEMLOD_SIMPLIFY_OFF; /* the exact order */
     threads_case(m, o, "fandisk exact 1000, max_deviation and locks");
     femlod_mesh_free(m);
     /* above 32,768 vertices and faces the set-up runs in parts too (Morton
@@ -1402,6 +1454,7 @@ int main(void) {
     test_fandisk();
     test_determinism();
     test_fast_passes();
+    test_default_order();
     test_threads();
     test_misoriented();
     test_max_deviation();

@@ -90,7 +90,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     o.max_valence = va % 4 == 0 ? -1 : (int)(4 + va % 12);
     unsigned kb = next(&b);
     o.keep_boundary = (int)(kb & 1u);
-    o.fast_above = kb & 2u ? 1.0 + (double)((kb >> 2) % 4) : 0.0; /* fast passes (docs/simplify.md) */
+    o.fast_above = kb & 2u ? 1.0 + (double)((kb >> 2) % 4) : FEMLOD_SIMPLIFY_OFF; /* fast passes or the exact order (docs/simplify.md) */
     femlod_mesh *out = NULL;
     femlod_collapse_log *log = NULL;
     femlod_simplify_result res;
