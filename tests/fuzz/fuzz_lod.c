@@ -142,8 +142,11 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         case 6: {
             femlod_region r;
             memset(&r, 0, sizeof r);
-            unsigned char *marks = calloc(nv, 1);
-            for (size_t v = arg % 7; v < nv; v += 7 + arg % 11) marks[v] = 1;
+            /* one mark per vertex of the hierarchy's input: the improve
+             * stage's mesh when it ran, so not nv */
+            size_t hv = femlod_hierarchy_input_vertices(h);
+            unsigned char *marks = calloc(hv ? hv : 1, 1);
+            for (size_t v = arg % 7; v < hv; v += 7 + arg % 11) marks[v] = 1;
             r.kind = FEMLOD_REGION_VERTICES;
             r.marks = marks;
             (void)femlod_hierarchy_refine_region(h, &r, 0.0, 1.5, NULL, &ops, &inside, &err);
@@ -152,7 +155,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
         }
         default:
             if (!has_kappa) {
-                double *kappa = calloc(nv, sizeof(double));
+                size_t hv = femlod_hierarchy_input_vertices(h);
+                double *kappa = calloc(hv ? hv : 1, sizeof(double));
                 femlod_mesh *im = NULL;
                 if (femlod_hierarchy_input_mesh(h, &im, &err) == FEMLOD_OK &&
                     femlod_mesh_curvature(im, NULL, NULL, NULL, kappa, NULL, NULL, &err) == FEMLOD_OK &&
