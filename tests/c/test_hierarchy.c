@@ -231,7 +231,12 @@ static void count_pairs(const femlod_hierarchy *h, const char *name) {
     femlod_mesh_free(soup);
 }
 
+/* 1: after every random operation too; 2: only the fronts the test checks */
 static int front_diag(void) {
+    const char *e = getenv("FEMLOD_TEST_FRONT_DIAG");
+    return e && (e[0] == '1' || e[0] == '2');
+}
+static int front_diag_steps(void) {
     const char *e = getenv("FEMLOD_TEST_FRONT_DIAG");
     return e && e[0] == '1';
 }
@@ -299,6 +304,8 @@ static void run(const char *name, size_t target, size_t random_ops, unsigned see
         return;
     }
     count_pairs(h, name);
+    if (front_diag()) /* the simplification's output itself */
+        printf("FIRST front of %s: %zu crossing pairs\n", name, front_crossings(h, 1));
     femlod_topology in_top;
     CHECK(femlod_mesh_topology(in, &in_top, NULL) == FEMLOD_OK);
     printf("%s: %zu -> %zu triangles, %zu nodes, %.1f bytes per input vertex\n", name,
@@ -351,7 +358,7 @@ static void run(const char *name, size_t target, size_t random_ops, unsigned see
             CHECK(femlod_hierarchy_split(h, x, &n, &err) == FEMLOD_EINPUT);
         }
         done += n;
-        if (front_diag()) {
+        if (front_diag_steps()) {
             static size_t last = 0;
             size_t now = front_crossings(h, 0);
             if (now != last)
