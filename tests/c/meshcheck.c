@@ -7,6 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+void (*meshcheck_on_pair)(const femlod_mesh *m, size_t f, size_t g, void *payload);
+void *meshcheck_pair_payload;
+
 size_t meshcheck_self_intersections(const femlod_mesh *m, double eps) {
     size_t nt = m->nt;
     if (nt < 2) return 0;
@@ -92,7 +95,9 @@ size_t meshcheck_self_intersections(const femlod_mesh *m, double eps) {
                             P[k] = m->pos + 3 * (size_t)m->tri[3 * f + (size_t)k];
                             Q[k] = m->pos + 3 * (size_t)m->tri[3 * g + (size_t)k];
                         }
-                        hits += (size_t)fl_tri_tri_intersect(P, m->tri + 3 * f, Q, m->tri + 3 * g, eps);
+                        int hit = fl_tri_tri_intersect(P, m->tri + 3 * f, Q, m->tri + 3 * g, eps);
+                        hits += (size_t)hit;
+                        if (hit && meshcheck_on_pair) meshcheck_on_pair(m, f, g, meshcheck_pair_payload);
                     }
                 }
             free(items);

@@ -10,6 +10,10 @@
  * edge; eps is the plane tolerance of fl_tri_tri_intersect. */
 size_t meshcheck_self_intersections(const femlod_mesh *m, double eps);
 
+/* When set, called with every intersecting pair (triangle indices f < g). */
+extern void (*meshcheck_on_pair)(const femlod_mesh *m, size_t f, size_t g, void *payload);
+extern void *meshcheck_pair_payload;
+
 /* Reads DIR/NAME; on failure prints the reader's message and returns NULL. */
 femlod_mesh *meshcheck_load(const char *dir, const char *name);
 

@@ -5,11 +5,25 @@
 #include "check.h"
 #include "shapes.h"
 #include "meshcheck.h"
+#include "cad_shapes.h"
+#include "hierarchy.h"
+#include "intersect.h"
+#include <time.h>
+#include <limits.h>
 
 #include <stdlib.h>
 #include <string.h>
 
 static femlod_mesh *load(const char *name) {
+    if (strcmp(name, "plate") == 0) {
+        /* a thin bent plate (diagnosis of mixed fronts): 1 x 1 x 0.02, both
+         * sides bent by the same smooth bump */
+        femlod_mesh *m = cad_thin_plate(80, 1.0, 0.02);
+        double *p = m->pos, pi = 3.141592653589793;
+        for (size_t v = 0; v < femlod_mesh_vertex_count(m); v++)
+            p[3 * v + 2] += 0.08 * sin(2 * pi * p[3 * v]) * sin(3 * pi * p[3 * v + 1]);
+        return m;
+    }
     char path[1024];
     snprintf(path, sizeof path, "%s/%s", FEMLOD_SHARED_DATA, name);
     femlod_mesh *m = NULL;
@@ -78,6 +92,240 @@ static femlod_mesh *front_mesh(femlod_hierarchy *h) {
  * collapse, so it meets the thresholds; the front stays manifold, oriented. */
 static size_t front_intersections;
 
+/* FEMLOD_TEST_EPS=x: the checker's plane tolerance as x times the diagonal
+ * (default 1e-10; 0 is the exact test) */
+static double eps_factor(void) {
+    const char *e = getenv("FEMLOD_TEST_EPS");
+    return e && *e ? strtod(e, NULL) : 1e-10;
+}
+
+/* FEMLOD_TEST_ERROR_ORDER=1 builds the test's hierarchies in the error order
+ * (docs/design.md "An order that knows the error"). */
+static int test_error_order(void) {
+    const char *e = getenv("FEMLOD_TEST_ERROR_ORDER");
+    return e && e[0] == '1';
+}
+
+/* FEMLOD_TEST_FRONT_DIAG=1: describe every crossing pair (diagnosis of
+ * mixed fronts). The birth of a face is the collapse that created it: its
+ * newest corner (faces are created around a newborn node); -1 for input. */
+static long face_death(const femlod_hierarchy *h, size_t f);
+static long face_birth(const femlod_hierarchy *h, size_t f);
+typedef struct diag_ctx {
+    femlod_hierarchy *h;
+    const uint32_t *nodes;
+    size_t nv;
+} diag_ctx;
+static void diag_pair(const femlod_mesh *m, size_t f, size_t g, void *payload) {
+    diag_ctx *c = payload;
+    const uint32_t *t = femlod_mesh_triangles(m);
+    const double *p = femlod_mesh_positions(m);
+    long birth[2];
+    int shared = 0;
+    double nrm[2][3], cen[2][3], emax = 0;
+    size_t fs[2] = {f, g};
+    for (int s = 0; s < 2; s++) {
+        long b = -1;
+        const uint32_t *tt = t + 3 * fs[s];
+        for (int k = 0; k < 3; k++) {
+            uint32_t x = c->nodes[tt[k]];
+            if (x >= c->nv && (long)(x - c->nv) > b) b = (long)(x - c->nv);
+            femlod_node_info in;
+            femlod_hierarchy_node(c->h, x, &in);
+            emax = fmax(emax, in.e_size);
+        }
+        birth[s] = b;
+        const double *a = p + 3 * tt[0], *bb = p + 3 * tt[1], *cc = p + 3 * tt[2];
+        double u[3], v[3];
+        for (int k = 0; k < 3; k++) {
+            u[k] = bb[k] - a[k];
+            v[k] = cc[k] - a[k];
+            cen[s][k] = (a[k] + bb[k] + cc[k]) / 3;
+        }
+        nrm[s][0] = u[1] * v[2] - u[2] * v[1];
+        nrm[s][1] = u[2] * v[0] - u[0] * v[2];
+        nrm[s][2] = u[0] * v[1] - u[1] * v[0];
+        double l = sqrt(nrm[s][0] * nrm[s][0] + nrm[s][1] * nrm[s][1] + nrm[s][2] * nrm[s][2]);
+        for (int k = 0; k < 3; k++) nrm[s][k] /= l > 0 ? l : 1;
+    }
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++) shared += t[3 * f + a] == t[3 * g + b];
+    double dot = 0, d2 = 0;
+    for (int k = 0; k < 3; k++) {
+        dot += nrm[0][k] * nrm[1][k];
+        d2 += (cen[0][k] - cen[1][k]) * (cen[0][k] - cen[1][k]);
+    }
+    /* the faces' ids in the hierarchy: find them by their corner nodes */
+    long death[2] = {-2, -2};
+    for (int s2 = 0; s2 < 2; s2++) {
+        uint32_t a = c->nodes[t[3 * fs[s2]]], b = c->nodes[t[3 * fs[s2] + 1]],
+                 cc = c->nodes[t[3 * fs[s2] + 2]];
+        for (size_t q = 0; q < c->h->nf; q++) {
+            const uint32_t *fv = c->h->face_v + 3 * q;
+            if ((fv[0] == a || fv[1] == a || fv[2] == a) && (fv[0] == b || fv[1] == b || fv[2] == b) &&
+                (fv[0] == cc || fv[1] == cc || fv[2] == cc)) {
+                death[s2] = face_death(c->h, q);
+                if (face_birth(c->h, q) != birth[s2]) death[s2] = -3;
+                break;
+            }
+        }
+    }
+    int coexisted = birth[0] < death[1] && birth[1] < death[0];
+    /* coplanar pair with one shared corner: how far their corner sectors at
+     * that corner overlap (radians; 0 = they only touch along a direction) */
+    double overlap = -1;
+    if (shared == 1) {
+        uint32_t sv = UINT32_MAX;
+        for (int a = 0; a < 3; a++)
+            for (int b = 0; b < 3; b++)
+                if (t[3 * f + a] == t[3 * g + b]) sv = t[3 * f + a];
+        double e1[3] = {1, 0, 0}, e2[3] = {0, 1, 0}, lo[2], hi[2];
+        const double *o = p + 3 * sv;
+        for (int k = 0; k < 3; k++) e1[k] = 0;
+        for (int s2 = 0; s2 < 2; s2++) {
+            double ang[2];
+            int na = 0;
+            for (int k = 0; k < 3; k++) {
+                uint32_t w = t[3 * fs[s2] + (size_t)k];
+                if (w == sv) continue;
+                double d[3];
+                for (int q = 0; q < 3; q++) d[q] = p[3 * w + q] - o[q];
+                if (s2 == 0 && na == 0) {
+                    double l = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+                    for (int q = 0; q < 3; q++) e1[q] = d[q] / l;
+                    e2[0] = nrm[0][1] * e1[2] - nrm[0][2] * e1[1];
+                    e2[1] = nrm[0][2] * e1[0] - nrm[0][0] * e1[2];
+                    e2[2] = nrm[0][0] * e1[1] - nrm[0][1] * e1[0];
+                }
+                ang[na++] = atan2(d[0] * e2[0] + d[1] * e2[1] + d[2] * e2[2],
+                                  d[0] * e1[0] + d[1] * e1[1] + d[2] * e1[2]);
+            }
+            lo[s2] = fmin(ang[0], ang[1]);
+            hi[s2] = fmax(ang[0], ang[1]);
+            if (hi[s2] - lo[s2] > 3.141592653589793) { /* the sector crosses -pi/pi */
+                double l = hi[s2];
+                hi[s2] = lo[s2] + 2 * 3.141592653589793;
+                lo[s2] = l;
+            }
+        }
+        overlap = fmin(hi[0], hi[1]) - fmax(lo[0], lo[1]);
+        for (int w = -1; w <= 1; w += 2) /* the same sector a turn away */
+            overlap = fmax(overlap, fmin(hi[0], hi[1] + w * 2 * 3.141592653589793) -
+                                        fmax(lo[0], lo[1] + w * 2 * 3.141592653589793));
+    }
+    printf("CROSS sector_overlap %.3g rad ", overlap);
+    {
+        const double *P[3], *Q[3];
+        for (int k = 0; k < 3; k++) {
+            P[k] = p + 3 * (size_t)t[3 * f + (size_t)k];
+            Q[k] = p + 3 * (size_t)t[3 * g + (size_t)k];
+        }
+        printf("eps0 %d eps1e-14 %d ", fl_tri_tri_intersect(P, t + 3 * f, Q, t + 3 * g, 0.0),
+               fl_tri_tri_intersect(P, t + 3 * f, Q, t + 3 * g, 1e-14));
+        static int dumped;
+        if (!dumped++) {
+            for (int k = 0; k < 3; k++) printf("\nP%d %u %.17g %.17g %.17g", k, t[3 * f + k], P[k][0], P[k][1], P[k][2]);
+            for (int k = 0; k < 3; k++) printf("\nQ%d %u %.17g %.17g %.17g", k, t[3 * g + k], Q[k][0], Q[k][1], Q[k][2]);
+            printf("\n");
+        }
+    }
+    printf("CROSS deaths %ld %ld coexisted %d ", death[0], death[1], coexisted);
+    printf("CROSS births %ld %ld gap %ld shared %d normal_dot %.3f centroid_dist/e_size %.2f\n",
+           birth[0], birth[1], labs(birth[0] - birth[1]), shared, dot, sqrt(d2) / (emax > 0 ? emax : 1));
+}
+/* FEMLOD_TEST_PAIRS=1: the pairs a build-time rule would have to order:
+ * faces that ever existed, cross, never coexisted in the simplification
+ * (lifetimes [birth, death) disjoint), and whose corners are not ancestor
+ * and descendant (so some front could hold both). */
+typedef struct pairs_ctx {
+    const femlod_hierarchy *h;
+    size_t crossing, disjoint, possible;
+} pairs_ctx;
+static long face_birth(const femlod_hierarchy *h, size_t f) {
+    long b = -1;
+    for (int k = 0; k < 3; k++) {
+        uint32_t x = h->face_v[3 * f + (size_t)k];
+        if (x >= h->nv && (long)(x - h->nv) > b) b = (long)(x - h->nv);
+    }
+    return b;
+}
+static long face_death(const femlod_hierarchy *h, size_t f) {
+    long d = LONG_MAX;
+    for (int k = 0; k < 3; k++) {
+        uint32_t p = h->parent[h->face_v[3 * f + (size_t)k]];
+        if (p != UINT32_MAX && (long)(p - h->nv) < d) d = (long)(p - h->nv);
+    }
+    return d;
+}
+static int is_ancestor(const femlod_hierarchy *h, uint32_t a, uint32_t x) {
+    while (x != UINT32_MAX && x < a) x = h->parent[x];
+    return x == a;
+}
+static void pairs_cb(const femlod_mesh *m, size_t f, size_t g, void *payload) {
+    (void)m;
+    pairs_ctx *c = payload;
+    const femlod_hierarchy *h = c->h;
+    c->crossing++;
+    long bf = face_birth(h, f), df = face_death(h, f), bg = face_birth(h, g), dg = face_death(h, g);
+    if (bf < dg && bg < df) return; /* coexisted: the simplifier checked them */
+    c->disjoint++;
+    for (int a = 0; a < 3; a++)
+        for (int b = 0; b < 3; b++) {
+            uint32_t x = h->face_v[3 * f + (size_t)a], y = h->face_v[3 * g + (size_t)b];
+            if (x != y && (is_ancestor(h, x, y) || is_ancestor(h, y, x))) return;
+        }
+    c->possible++;
+}
+static void count_pairs(const femlod_hierarchy *h, const char *name) {
+    const char *e = getenv("FEMLOD_TEST_PAIRS");
+    if (!(e && e[0] == '1')) return;
+    clock_t t0 = clock();
+    femlod_mesh *soup = NULL;
+    CHECK(femlod_mesh_create(&soup, h->pos, h->nn, h->face_v, h->nf, NULL) == FEMLOD_OK);
+    femlod_quality q;
+    CHECK(femlod_mesh_quality(soup, &q, NULL) == FEMLOD_OK);
+    pairs_ctx c = {h, 0, 0, 0};
+    meshcheck_on_pair = pairs_cb;
+    meshcheck_pair_payload = &c;
+    meshcheck_self_intersections(soup, eps_factor() * sqrt(pow(q.bbox_max[0] - q.bbox_min[0], 2) +
+                                                    pow(q.bbox_max[1] - q.bbox_min[1], 2) +
+                                                    pow(q.bbox_max[2] - q.bbox_min[2], 2)));
+    meshcheck_on_pair = NULL;
+    printf("PAIRS %s: %zu faces ever, %zu crossing pairs, %zu never coexisted, %zu could share a "
+           "front; %.2f s\n", name, h->nf, c.crossing, c.disjoint, c.possible,
+           (double)(clock() - t0) / CLOCKS_PER_SEC);
+    femlod_mesh_free(soup);
+}
+
+/* 1: after every random operation too; 2: only the fronts the test checks */
+static int front_diag(void) {
+    const char *e = getenv("FEMLOD_TEST_FRONT_DIAG");
+    return e && (e[0] == '1' || e[0] == '2');
+}
+static int front_diag_steps(void) {
+    const char *e = getenv("FEMLOD_TEST_FRONT_DIAG");
+    return e && e[0] == '1';
+}
+static size_t front_crossings(femlod_hierarchy *h, int describe) {
+    femlod_mesh *m = NULL;
+    uint32_t *nodes = NULL;
+    CHECK(femlod_hierarchy_extract(h, &m, &nodes, NULL) == FEMLOD_OK);
+    femlod_quality q;
+    CHECK(femlod_mesh_quality(m, &q, NULL) == FEMLOD_OK);
+    diag_ctx c = {h, nodes, femlod_hierarchy_input_vertices(h)};
+    if (describe) {
+        meshcheck_on_pair = diag_pair;
+        meshcheck_pair_payload = &c;
+    }
+    size_t x = meshcheck_self_intersections(m, eps_factor() * sqrt(pow(q.bbox_max[0] - q.bbox_min[0], 2) +
+                                                           pow(q.bbox_max[1] - q.bbox_min[1], 2) +
+                                                           pow(q.bbox_max[2] - q.bbox_min[2], 2)));
+    meshcheck_on_pair = NULL;
+    free(nodes);
+    femlod_mesh_free(m);
+    return x;
+}
+
 static void check_front(femlod_hierarchy *h, const femlod_topology *in_top, double min_stretch,
                         double max_size, const femlod_mesh *input) {
     femlod_error err;
@@ -96,10 +344,11 @@ static void check_front(femlod_hierarchy *h, const femlod_topology *in_top, doub
     CHECK(q.size_max <= fmax(max_size, qi.size_max) + 1e-12);
     /* triangles that never coexisted can meet in a front: measured, and
      * none was found on the test meshes (docs/design.md) */
-    size_t x = meshcheck_self_intersections(m, 1e-10 * sqrt(pow(q.bbox_max[0] - q.bbox_min[0], 2) +
+    size_t x = meshcheck_self_intersections(m, eps_factor() * sqrt(pow(q.bbox_max[0] - q.bbox_min[0], 2) +
                                                            pow(q.bbox_max[1] - q.bbox_min[1], 2) +
                                                            pow(q.bbox_max[2] - q.bbox_min[2], 2)));
     front_intersections += x;
+    if (x && front_diag()) front_crossings(h, 1);
     CHECK(x == 0);
     femlod_mesh_free(m);
 }
@@ -109,6 +358,7 @@ static void run(const char *name, size_t target, size_t random_ops, unsigned see
     femlod_collapse_log *log = NULL;
     femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
     o.target = target;
+    o.error_order = test_error_order();
     femlod_simplify_result r;
     femlod_error err;
     CHECK(femlod_simplify(&out, &log, in, &o, &r, &err) == FEMLOD_OK);
@@ -119,6 +369,9 @@ static void run(const char *name, size_t target, size_t random_ops, unsigned see
         fprintf(stderr, "%s: %s\n", name, err.message);
         return;
     }
+    count_pairs(h, name);
+    if (front_diag()) /* the simplification's output itself */
+        printf("FIRST front of %s: %zu crossing pairs\n", name, front_crossings(h, 1));
     femlod_topology in_top;
     CHECK(femlod_mesh_topology(in, &in_top, NULL) == FEMLOD_OK);
     printf("%s: %zu -> %zu triangles, %zu nodes, %.1f bytes per input vertex\n", name,
@@ -171,6 +424,18 @@ static void run(const char *name, size_t target, size_t random_ops, unsigned see
             CHECK(femlod_hierarchy_split(h, x, &n, &err) == FEMLOD_EINPUT);
         }
         done += n;
+        if (front_diag_steps()) {
+            static size_t last = 0;
+            size_t now = front_crossings(h, 0);
+            if (now != last)
+                printf("STEP %zu kind %s node %u ops %zu crossings %zu -> %zu\n", step,
+                       step % 500 == 250   ? "refine"
+                       : step % 500 == 499 ? "coarsen"
+                       : info.state == FEMLOD_NODE_FRONT ? "split"
+                       : info.state == FEMLOD_NODE_ABOVE ? "collapse" : "none",
+                       x, n, last, now);
+            last = now;
+        }
         if (step % 1000 == 999) {
             check_front(h, &in_top, r.min_stretch, r.max_size, in);
             batches++;
@@ -363,6 +628,7 @@ static femlod_hierarchy *simplified(const femlod_mesh *in, size_t target, femlod
                                     femlod_collapse_log **log) {
     femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
     o.target = target;
+    o.error_order = test_error_order();
     femlod_hierarchy *h = NULL;
     CHECK(femlod_simplify(out, log, in, &o, NULL, NULL) == FEMLOD_OK);
     CHECK(femlod_hierarchy_create(&h, in, *log, NULL, NULL) == FEMLOD_OK);
@@ -494,6 +760,7 @@ static void test_refine_region(const char *name, size_t target, int heavy) {
     femlod_collapse_log *log = NULL;
     femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
     o.target = target;
+    o.error_order = test_error_order();
     femlod_hierarchy *h = NULL;
     femlod_simplify_result res;
     CHECK(femlod_simplify(&out, &log, in, &o, &res, NULL) == FEMLOD_OK);
@@ -960,6 +1227,18 @@ static void test_checker(void) {
 int main(void) {
     const char *heavy = getenv("FEMLOD_TEST_HEAVY");
     int is_heavy = !(heavy && heavy[0] == '0');
+    const char *only = getenv("FEMLOD_TEST_ONLY"); /* diagnosis: one mesh, "name:target" */
+    if (only && *only) {
+        char nm[256];
+        snprintf(nm, sizeof nm, "%s", only);
+        char *colon = strchr(nm, ':');
+        size_t target = colon ? (size_t)strtoul(colon + 1, NULL, 10) : 3000;
+        if (colon) *colon = 0;
+        run(nm, target, 10000, 7u);
+        test_refine_region(nm, target, 0);
+        printf("self-intersecting pairs over all checked fronts: %zu\n", front_intersections);
+        return check_report("hierarchy");
+    }
     test_checker();
     test_progress();
     test_refine_ball();
