@@ -12,6 +12,9 @@
  * triangles share taken out of the question (as CGAL's
  * Polygon_mesh_processing::does_self_intersect does): neighbours in a mesh
  * always touch there, and only contact elsewhere is a self-intersection.
+ * Two triangles with one common corner are tested edge against triangle
+ * (each one's edge opposite that corner against the other), not through the
+ * line of their planes, which nearly coplanar neighbours make ill-conditioned.
  *
  * Point-triangle distance: Ericson, "Real-Time Collision Detection", 5.1.5.
  */
@@ -75,12 +78,14 @@ static int tri_tri_2d(const pt2 p[3], const pt2 q[3]) {
     return pt_in_tri_2d(p[0], q) || pt_in_tri_2d(q[0], p);
 }
 
-static void project(pt2 out[3], const double *const T[3], int axis) {
+/* Drop coordinate axis. */
+static inline pt2 proj1(const double *x, int axis) {
     int u = axis == 0 ? 1 : 0, v = axis == 2 ? 1 : 2;
-    for (int c = 0; c < 3; c++) {
-        out[c].x = T[c][u];
-        out[c].y = T[c][v];
-    }
+    return (pt2){x[u], x[v]};
+}
+
+static void project(pt2 out[3], const double *const T[3], int axis) {
+    for (int c = 0; c < 3; c++) out[c] = proj1(T[c], axis);
 }
 
 static int dominant_axis(const double n[3]) {
@@ -147,6 +152,29 @@ static void interval(const double *const T[3], const double d[3], const double r
     }
     *lo = a;
     *hi = b;
+}
+
+/* Segment (a, b) against triangle T, from a's and b's distances to T's
+ * plane, snapped (da, db) and raw (ra, rb): an end snapped onto the plane
+ * meets T when it lies in T, both ends snapped make a question in the
+ * plane, and a change of sign of the raw distances puts a crossing point
+ * in the plane, which must lie in T (checked even when an end was snapped:
+ * a snapped end does not stand for the crossing). In T's plane the test
+ * is 2D, on the axis plane that T projects onto best; closed, so touching
+ * counts. */
+static int seg_meets_tri(const double *a, const double *b, double da, double db, double ra, double rb,
+                         const double *const T[3], int axis) {
+    pt2 t2[3], a2 = proj1(a, axis), b2 = proj1(b, axis);
+    project(t2, T, axis);
+    if (da == 0.0 && db == 0.0) return seg_tri_2d(a2, b2, t2);
+    if (da == 0.0 && pt_in_tri_2d(a2, t2)) return 1;
+    if (db == 0.0 && pt_in_tri_2d(b2, t2)) return 1;
+    if ((ra > 0 && rb < 0) || (ra < 0 && rb > 0)) {
+        double s = ra / (ra - rb), x[3];
+        for (int k = 0; k < 3; k++) x[k] = a[k] + s * (b[k] - a[k]);
+        return pt_in_tri_2d(proj1(x, axis), t2);
+    }
+    return 0;
 }
 
 void fl_tri_plane_of(const double *const T[3], fl_tri_plane *pl) {
@@ -259,6 +287,21 @@ int fl_tri_tri_intersect_p(const double *const P[3], const uint32_t pid[3], cons
                seg_tri_2d(q2[(cq + 1) % 3], q2[(cq + 2) % 3], p2);
     }
 
+    if (shared == 1) {
+        /* Two triangles with one common corner v meet elsewhere exactly
+         * when the edge of one opposite v meets the other: a common point
+         * x != v makes the segment v-x common, and walking on from v along
+         * it, the first triangle to end does so on its opposite edge,
+         * inside the other. No line of the two planes is needed, which
+         * for nearly coplanar faces is ill-conditioned: a corner within
+         * eps of the other plane can lie far from that line
+         * (docs/design.md "Intersection-free fronts"). */
+        int cp = sp[0] >= 0 ? 0 : (sp[1] >= 0 ? 1 : 2), cq = sp[cp];
+        int p1 = (cp + 1) % 3, p2 = (cp + 2) % 3, q1 = (cq + 1) % 3, q2 = (cq + 2) % 3;
+        return seg_meets_tri(P[p1], P[p2], dp[p1], dp[p2], rp[p1], rp[p2], Q, dominant_axis(nq)) ||
+               seg_meets_tri(Q[q1], Q[q2], dq[q1], dq[q2], rq[q1], rq[q2], P, dominant_axis(np));
+    }
+
     /* Moller: both triangles meet the line L of the two planes in an
      * interval; they intersect when the intervals overlap. */
     double D[3];
@@ -269,11 +312,7 @@ int fl_tri_tri_intersect_p(const double *const P[3], const uint32_t pid[3], cons
     double a0, a1, b0, b1;
     interval(P, dp, rp, D, &a0, &a1);
     interval(Q, dq, rq, D, &b0, &b1);
-    double overlap = mn(a1, b1) - mx(a0, b0);
-    if (shared == 0) return overlap >= 0.0;
-    /* One shared corner lies in both intervals: only an overlap longer than
-     * the snapping tolerance is a real crossing. */
-    return overlap > eps;
+    return mn(a1, b1) - mx(a0, b0) >= 0.0;
 }
 
 double fl_point_tri_dist2(const double p[3], const double a[3], const double b[3], const double c[3]) {
