@@ -873,12 +873,24 @@ static int simplify_options(lua_State *L, const cli *c) {
             for (size_t k = 0; k < N_SIMPLIFY_OPTS && !o; k++)
                 if (strlen(simplify_opts[k].flag) == len && strncmp(simplify_opts[k].flag, a, len) == 0)
                     o = &simplify_opts[k];
+            int negated = 0; /* --no-NAME: NAME=false, for a switch (docs/cli.md) */
+            if (!o && !eq && len > 5 && strncmp(a, "--no-", 5) == 0)
+                for (size_t k = 0; k < N_SIMPLIFY_OPTS && !o; k++)
+                    if (simplify_opts[k].kind == OPT_SWITCH && strlen(simplify_opts[k].flag) == len - 3 &&
+                        strncmp(simplify_opts[k].flag + 2, a + 5, len - 5) == 0)
+                        o = &simplify_opts[k], negated = 1;
             if (!o) return simplify_unknown(a, len, 1);
             name = lua_pushlstring(L, a, len); /* popped at the end of the iteration */
             if (eq) {
                 value = eq + 1;
                 if (o->kind == OPT_SWITCH) return fl_cli_usage_error("%s takes no value", name);
-            } else if (o->kind != OPT_SWITCH) {
+            } else if (negated) {
+                value = "false";
+            } else if (o->kind == OPT_SWITCH) {
+                /* a switch may be followed by true or false (docs/cli.md) */
+                if (i + 1 < c->argc && (strcmp(c->argv[i + 1], "true") == 0 || strcmp(c->argv[i + 1], "false") == 0))
+                    value = c->argv[++i];
+            } else {
                 if (i + 1 >= c->argc) return fl_cli_usage_error("%s needs a value", name);
                 value = c->argv[++i];
             }

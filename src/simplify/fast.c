@@ -734,6 +734,10 @@ int fl_simp_band_run(simp *S, const femlod_simplify_options *o, size_t floor_liv
     }
     float top = -1.0f;
     if (!band_eval_all(S, &X, &top)) goto done;
+    /* no valid edge under error_order's first cap (a coarse input): the
+     * next caps, as a pass without one would raise them */
+    while (top < 0.0f && fl_simp_raise_cap(S))
+        if (!band_eval_all(S, &X, &top)) goto done;
     double tau = (double)top * FEMLOD_SIMPLIFY_BAND;
     STAT_TIME(2, t2);
 #if FEMLOD_SIMPLIFY_STATS

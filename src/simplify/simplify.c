@@ -85,8 +85,8 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
     /* C1: the default is scale-aware: docs/simplify.md "Defaults" */
     S->tol_on = o->tolerance >= 0.0;
     S->tol = o->tolerance > 0.0 ? o->tolerance : FEMLOD_SIMPLIFY_DEFAULT_TOLERANCE * mean_edge * mean_edge;
-    /* the error order's schedule (queue.c) */
-    S->sched = o->error_order != 0;
+    /* the error order's schedule (queue.c): the default; < 0 the paper's order */
+    S->sched = o->error_order >= 0;
     S->cap0 = FEMLOD_SIMPLIFY_CAP0 * mean_edge * mean_edge;
     S->cap_end = 1e6 * diag * diag; /* without a tolerance: past any error a collapse can have */
     S->dev_on = o->max_deviation > 0.0;

@@ -420,14 +420,24 @@ do
   T.check(T.readfile(out2) == T.readfile(out), "flags and name=value give byte-identical output")
   code, text = run("simplify", fandisk, out2, "--target=3000", "--min-stretch=0.3")
   T.check(T.readfile(out2) == T.readfile(out), "--flag=value too")
-  -- --error-order: the Lua option error_order (a different mesh at the same count)
+  -- --error-order: the Lua option error_order, on by default; --no-error-order,
+  -- --error-order false and error_order=false: the paper's order (another mesh)
   local out5, out6 = path("simplified5.obj"), path("simplified6.obj")
   T.eq(run("simplify", fandisk, out5, "--target", "3000", "--error-order"), 0, "--error-order")
   T.eq(run("simplify", fandisk, out6, "--target", "3000", "error_order=true"), 0, "error_order=true")
   T.check(T.readfile(out5) == T.readfile(out6), "--error-order is error_order=true")
   local out7 = path("simplified7.obj")
-  T.eq(run("simplify", fandisk, out7, "--target", "3000"), 0, "the paper's order")
-  T.check(T.readfile(out5) ~= T.readfile(out7), "--error-order changes the order")
+  T.eq(run("simplify", fandisk, out7, "--target", "3000"), 0, "the default order")
+  T.check(T.readfile(out5) == T.readfile(out7), "--error-order is the default")
+  T.eq(run("simplify", fandisk, out6, "--target", "3000", "--no-error-order"), 0, "--no-error-order")
+  T.check(T.readfile(out5) ~= T.readfile(out6), "--no-error-order changes the order")
+  for _, form in ipairs { { "--error-order", "false" }, { "error_order=false" } } do
+    T.eq(run("simplify", fandisk, out7, "--target", "3000", table.unpack(form)), 0, table.concat(form, " "))
+    T.check(T.readfile(out7) == T.readfile(out6), table.concat(form, " ") .. " is --no-error-order")
+  end
+  T.eq(run("simplify", fandisk, out7, "--target", "3000", "--keep-boundary", "true"), 0, "--keep-boundary true")
+  code, text = run("simplify", fandisk, out7, "--target", "3000", "--no-target")
+  T.eq(code, 2, "--no-NAME is only for switches")
 
   -- off, switches and lock
   local out3 = path("simplified3.stl")
