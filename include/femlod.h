@@ -501,14 +501,15 @@ typedef struct femlod_simplify_options {
      * a floor (docs/design.md "The hierarchy below the target"). Ignored
      * without a log or a target. */
     size_t hierarchy_floor;
-    /* Nonzero: the error order (docs/simplify.md "The error order"): the
-     * collapses are taken in the paper's shape order under a cap on the
-     * quadric error that starts far below the tolerance and rises only when
-     * no valid collapse is left under it, with a least stretch of 0.4 (or
-     * min_stretch, if higher) while the cap is below the tolerance. At
-     * equal count the distance to the input is far smaller (cover.obj to
-     * 12,000: 0.0090 against 0.68), the stretch somewhat lower. 0 (the
-     * default): the paper's order, under the tolerance alone. */
+    /* 0 (the default) or > 0: the error order (docs/simplify.md "The
+     * error order"): the collapses are taken in the paper's shape order
+     * under a cap on the quadric error that starts far below the tolerance
+     * and rises only when no valid collapse is left under it, with a least
+     * stretch of 0.4 (or min_stretch, if higher) while the cap is below the
+     * tolerance. At equal count the distance to the input is far smaller
+     * than the paper's order's (cover.obj to 12,000: 0.0090 against 0.68),
+     * the stretch somewhat lower. < 0: the paper's order, under the
+     * tolerance alone (its Table 1). */
     int error_order;
     /* 0 (the default): when the input breaks min_stretch, max_valence or a
      * max_size given, the improvement stage (femlod_improve, with these

@@ -760,6 +760,7 @@ static const simplify_opt simplify_opts[] = {
     {"--keep-boundary", "keep_boundary", OPT_SWITCH},
     {"--area-weighted", "area_weighted", OPT_SWITCH},
     {"--error-order", "error_order", OPT_SWITCH},
+    {"--no-error-order", "error_order", OPT_SWITCH_OFF}, /* error_order = false: the paper's order */
     {"--no-improve", "improve", OPT_SWITCH_OFF}, /* the option improve = false */
     {"--fast-above", "fast_above", OPT_THRESHOLD},
     {"--threads", "threads", OPT_NUMBER},

@@ -193,7 +193,7 @@ const char *fl_simplify_read_options(lua_State *L, int idx, femlod_simplify_opti
         int on = lua_toboolean(L, -1);
         if (k == 0) o->keep_boundary = on;
         else if (k == 1) o->area_weighted = on;
-        else if (k == 2) o->error_order = on;
+        else if (k == 2) o->error_order = t == LUA_TNIL ? 0 : (on ? 1 : -1); /* nil: the default (on) */
         else o->no_improve = t == LUA_TBOOLEAN && !on; /* nil: the default, on */
         lua_pop(L, 1);
     }

@@ -88,8 +88,8 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
     /* C1: the default is scale-aware: docs/simplify.md "Defaults" */
     S->tol_on = o->tolerance >= 0.0;
     S->tol = o->tolerance > 0.0 ? o->tolerance : FEMLOD_SIMPLIFY_DEFAULT_TOLERANCE * mean_edge * mean_edge;
-    /* the error order's schedule (queue.c) */
-    S->sched = o->error_order != 0;
+    /* the error order's schedule (queue.c): the default; < 0 the paper's order */
+    S->sched = o->error_order >= 0;
     /* fast_above 0: the default, fast passes at the default factor in the
      * error order and the exact order in the paper's (where the passes cost
      * more than 0.01 of average stretch: docs/simplify.md "Fast passes");

@@ -1,7 +1,8 @@
-/* test_error_order.c - the error order (error_order, docs/design.md "An
- * order that knows the error"), measured on its outputs: at equal count
- * on cover.obj its Hausdorff distance to the input is far below the
- * paper's order's while the stretch stays above the thresholds; with
+/* test_error_order.c - the error order, femlod's default (error_order,
+ * docs/design.md "An order that knows the error"), measured on its
+ * outputs: at equal count on cover.obj its Hausdorff distance to the input
+ * is far below the paper's order's and within twice OpenMesh+aspect's,
+ * its stretch above OpenMesh+aspect's by 0.03; with
  * max_deviation the bound still holds; fandisk's sharp edges survive; the
  * runs repeat byte for byte for 1 and 2 threads, exact and fast. */
 #include "check.h"
@@ -52,28 +53,38 @@ static int run(outcome *r, const femlod_mesh *m, const femlod_simplify_options *
     return 1;
 }
 
-/* cover.obj at 12,000 and 6,000 with the defaults: the paper's order, then
- * the error order. Measured: Hausdorff 0.68 / 0.72 against 0.0090 / 0.149,
- * stretch avg 0.806 / 0.777 against 0.775 / 0.687. */
+/* cover.obj at 12,000 and 6,000: the paper's order (error_order < 0), then
+ * the default (the error order). Measured: Hausdorff 0.68 / 0.72 against
+ * 0.0090 / 0.149, stretch avg 0.806 / 0.777 against 0.775 / 0.687.
+ * The default must meet issue 37's bar against OpenMesh's Decimater with
+ * ModQuadric, ModAspectRatio(5) and ModNormalFlipping at the same count:
+ * Hausdorff at most twice its, average stretch at least its + 0.03, least
+ * stretch at least 0.2. The test cannot run OpenMesh: its figures are
+ * pinned as tests/bench/bench_peers measured them on cover.obj
+ * (docs/simplify.md, the Peers table): 0.00866 / 0.737 at 12,000, 0.149 /
+ * 0.615 at 6,000 (Hausdorff from femlod_mesh_hausdorff / stretch avg). */
 static void test_cover(void) {
     femlod_mesh *m = load("cover.obj");
     if (!m) return;
     const size_t targets[2] = {12000, 6000};
-    const double ratio[2] = {20.0, 2.0};      /* the error order's distance at least this much smaller */
-    const double min_avg[2] = {0.76, 0.67};   /* its average stretch at least */
+    const double ratio[2] = {20.0, 2.0};           /* the default's distance at least this much smaller */
+    const double peer_h[2] = {0.00866, 0.149};     /* OpenMesh+aspect's Hausdorff, bench_peers */
+    const double peer_avg[2] = {0.737, 0.615};     /* its average stretch */
     for (int k = 0; k < 2; k++) {
         femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
         o.target = targets[k];
+        o.error_order = -1;
         outcome plain, err;
         char label[64];
         snprintf(label, sizeof label, "cover %zu, paper's order", targets[k]);
         if (!run(&plain, m, &o, label)) continue;
-        o.error_order = 1;
-        snprintf(label, sizeof label, "cover %zu, error order", targets[k]);
+        o.error_order = 0; /* the default */
+        snprintf(label, sizeof label, "cover %zu, default (error order)", targets[k]);
         if (run(&err, m, &o, label)) {
             CHECK(err.res.stop_reason == FEMLOD_STOP_TARGET && err.q.triangles == targets[k]);
             CHECK(err.hausdorff * ratio[k] <= plain.hausdorff);
-            CHECK(err.q.stretch_avg >= min_avg[k]);
+            CHECK(err.hausdorff <= 2.0 * peer_h[k]);
+            CHECK(err.q.stretch_avg >= peer_avg[k] + 0.03);
             CHECK(err.q.stretch_min >= 0.2 && err.q.valence_max <= 12);
             CHECK(err.q.size_max <= err.res.max_size * (1 + 1e-12));
             femlod_mesh_free(err.out);
@@ -177,12 +188,14 @@ static void test_fandisk(void) {
     femlod_mesh_free(m);
 }
 
-/* The same output for 1 and 2 threads, exact order and fast passes. */
+/* The same output for 1 and 2 threads, exact order and fast passes; the
+ * default (0) is error_order = 1, and error_order = -1 (the paper's order)
+ * another mesh. */
 static void test_threads(void) {
     femlod_mesh *m = load("fandisk.obj");
     if (!m) return;
     for (int fast = 0; fast < 2; fast++) {
-        femlod_mesh *a = NULL, *b = NULL;
+        femlod_mesh *a = NULL, *b = NULL, *c = NULL, *d = NULL;
         femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
         o.target = 1500;
         o.error_order = 1;
@@ -192,8 +205,16 @@ static void test_threads(void) {
         o.threads = 2;
         CHECK(femlod_simplify(&b, NULL, m, &o, NULL, NULL) == FEMLOD_OK);
         CHECK(a && b && shape_same_mesh(a, b));
+        o.error_order = 0;
+        CHECK(femlod_simplify(&c, NULL, m, &o, NULL, NULL) == FEMLOD_OK);
+        CHECK(a && c && shape_same_mesh(a, c));
+        o.error_order = -1;
+        CHECK(femlod_simplify(&d, NULL, m, &o, NULL, NULL) == FEMLOD_OK);
+        CHECK(a && d && !shape_same_mesh(a, d));
         femlod_mesh_free(a);
         femlod_mesh_free(b);
+        femlod_mesh_free(c);
+        femlod_mesh_free(d);
     }
     femlod_mesh_free(m);
 }

@@ -310,9 +310,23 @@ do
   T.eq(c.inside, a.inside, "inside: as many triangles as the input")
   T.check(c.inside_max <= a.inside_max, "inside: no triangle larger than the input's largest there")
   -- Outside: still coarse (dependencies split a little beyond the sphere).
-  T.check(c.outside < 0.25 * a.outside, "outside: far fewer triangles than the input: " .. c.outside)
-  T.check(c.outside < 1.5 * b.outside, "outside: close to the simplification result: " .. c.outside)
   T.check(c.outside_max > a.outside_max, "outside: coarse elements remain: " .. c.outside_max)
+  -- How far the dependencies reach depends on the order: these bars hold
+  -- for the paper's order (measured 2231 outside against 1842 simplified,
+  -- 1.21x); the default, the error order, measured 3159 against 1876
+  -- (1.68x, 0.27 of the input): its hierarchy's dependencies reach farther.
+  do
+    local hp = fandisk:simplify { target = 2000, hierarchy_floor = false, error_order = false }
+    local bp = regions(hp:mesh(), CORNER, r_in, r_out)
+    hp:refine(function(x, y, z) return sphere_size(x, y, z) end)
+    local cp = regions(hp:mesh(), CORNER, r_in, r_out)
+    print(string.format("  paper's order: outside simplified %d, refined %d; the default: %d, %d", bp.outside,
+      cp.outside, b.outside, c.outside))
+    T.eq(cp.inside, a.inside, "paper's order, inside: as many triangles as the input")
+    T.check(cp.outside < 0.25 * a.outside, "paper's order, outside: far fewer triangles than the input: " .. cp.outside)
+    T.check(cp.outside < 1.5 * bp.outside, "paper's order, outside: close to the simplification result: " .. cp.outside)
+    hp:close()
+  end
   local q = lod:quality()
   T.check(q.closed and q.manifold and q.oriented, "the refined mesh is closed, manifold and oriented")
   -- Input triangles as they were, created ones within the thresholds.
@@ -733,7 +747,11 @@ do
   local function run(path_mesh, path_flh)
     local x = fandisk:simplify { target = 2000 }
     x:refine(function(a, b, c) return sphere_size(a, b, c) end)
-    x:split { deep_front }
+    local deep -- a front node with an internal child, on this front
+    for _, id in ipairs(x:front()) do
+      if id > V and x:node(id).children[1] > V then deep = id break end
+    end
+    x:split { deep }
     x:coarsen(0.02)
     x:refine(0.04)
     x:mesh():save(path_mesh)
@@ -892,18 +910,38 @@ do
   h:refine_curvature {}
   check_front("refine_curvature below and above the target")
   local fine = h:counts().triangles
-  T.check(fine > 30000, "refine_curvature from 12,000: " .. fine)
+  -- (the paper's order: more than 30,000, below; the default measured 29,430)
+  T.check(fine > 24000, "refine_curvature from 12,000: " .. fine)
   ops, n, why = h:rescale { target = 12000 }
   T.check(math.abs(n - 12000) <= 60, "the recipe's rescale back: within 0.5% of 12,000: " .. n)
   T.eq(why, nil, "the recipe's rescale: no reason")
   T.check(serial(h:mesh()) ~= serial(plain:mesh()), "the recipe does not give the plain simplification back")
   check_front("the recipe's result")
-  -- and it keeps the curved parts finer than the plain simplification
+  -- and it keeps the curved parts finer than the plain simplification: in
+  -- the paper's order. The default (the error order) keeps the curved parts
+  -- in its plain result already (measured 557 high-kappa input vertices
+  -- against the paper's order's 147), and the recipe adds little to it
+  -- (576, 1.03x): what the default must do is keep at least as many as the
+  -- paper's order's recipe.
   local kept, k_plain = high_kappa_kept(cover, h), high_kappa_kept(cover, plain)
-  T.check(kept >= 1.25 * k_plain, string.format(
-    "the recipe keeps >= 1.25x the plain simplification's high-kappa input vertices: %d against %d", kept, k_plain))
-  print(string.format("cover recipe: %d high-kappa input vertices kept against the plain simplification's %d (%.2fx)",
-    kept, k_plain, kept / k_plain))
+  print(string.format("cover recipe, default order: %d high-kappa input vertices kept against the plain "
+    .. "simplification's %d (%.2fx)", kept, k_plain, kept / k_plain))
+  do
+    local pp <close> = cover:simplify(with(with(opts, "hierarchy_floor", false), "error_order", false))
+    local hp <close> = cover:simplify(with(opts, "error_order", false))
+    hp:refine_curvature {}
+    local pfine = hp:counts().triangles
+    T.check(pfine > 30000, "paper's order: refine_curvature from 12,000: " .. pfine)
+    local _, pn = hp:rescale { target = 12000 }
+    T.check(math.abs(pn - 12000) <= 60, "paper's order: the recipe's rescale back within 0.5% of 12,000: " .. pn)
+    local pkept, pk_plain = high_kappa_kept(cover, hp), high_kappa_kept(cover, pp)
+    T.check(pkept >= 1.25 * pk_plain, string.format("paper's order: the recipe keeps >= 1.25x the plain "
+      .. "simplification's high-kappa input vertices: %d against %d", pkept, pk_plain))
+    print(string.format("cover recipe, paper's order: %d high-kappa input vertices kept against the plain "
+      .. "simplification's %d (%.2fx)", pkept, pk_plain, pkept / pk_plain))
+    T.check(k_plain >= pkept and kept >= pkept, string.format("the default keeps at least the paper's order's recipe's "
+      .. "high-kappa input vertices: plain %d, recipe %d against %d", k_plain, kept, pkept))
+  end
   -- region and coarsen below the target
   h:rescale { target = 4000 }
   h:refine_region { sphere = { center = { 0, 0, 0 }, radius = 20 }, size = 0 }
@@ -935,7 +973,23 @@ end
 -- high-kappa vertices, too few to compare)
 do
   local plate <close> = bumpy_plate()
-  local opts = { target = 8000, tolerance = 0.15, min_stretch = 0.2, max_size = 15, max_valence = 12 }
+  -- in the paper's order: the default keeps every high-kappa vertex of the
+  -- plate at 8,000 (1,141 of 1,141; refine_curvature then finds nothing to
+  -- refine: 8,004 triangles), checked below
+  local opts = { target = 8000, tolerance = 0.15, min_stretch = 0.2, max_size = 15, max_valence = 12,
+    error_order = false }
+  do
+    local d <close> = plate:simplify { target = 8000, tolerance = 0.15, min_stretch = 0.2, max_size = 15,
+      max_valence = 12 }
+    local sorted = {}
+    for i, k in ipairs(plate:curvature().kappa) do sorted[i] = k end
+    table.sort(sorted)
+    local top, total = sorted[math.ceil(0.95 * #sorted)], 0
+    for _, k in ipairs(sorted) do if k >= top then total = total + 1 end end
+    local dk = high_kappa_kept(plate, d)
+    print(string.format("plate, default order: %d of the %d high-kappa input vertices kept at 8,000", dk, total))
+    T.eq(dk, total, "plate, default order: every high-kappa input vertex kept at 8,000")
+  end
   local h <close> = plate:simplify(opts)
   local k_plain = high_kappa_kept(plate, h)
   h:refine_curvature {}
@@ -1133,7 +1187,7 @@ do
   local env = { h = h2 }
   T.errmsg("code:1: boom", "h:refine_curvature { map = function(k) error('boom') end }", env)
   T.eq(h2:validate(), true, "valid after a failing map")
-  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: function returned string for kappa 0.0 "
+  T.errmsg("code:1: bad argument #1 to 'refine_curvature' (map: function returned string for kappa 20.357613219894 "
     .. "(number expected))", "h:refine_curvature { map = function(k) return 'x' end }", env)
   T.errmsg("code:1: bad argument #1 to 'refine_curvature' (unknown key 'fien'; valid keys: coarse, fine, "
     .. "map, percentile, progress, radius)", "h:refine_curvature { fien = 1 }", env)
