@@ -854,13 +854,16 @@ static int set_simplify_opt(lua_State *L, int opts, int spell, const simplify_op
 static int simplify_unknown(const char *word, size_t len, int flag) {
     const char *names[N_SIMPLIFY_OPTS + 1];
     char list[512] = "";
-    size_t used = 0;
+    size_t used = 0, n = 0;
     for (size_t k = 0; k < N_SIMPLIFY_OPTS; k++) {
-        names[k] = flag ? simplify_opts[k].flag : simplify_opts[k].key;
+        /* a key spelled by two flags (--error-order, --no-error-order) once */
+        if (!flag && k > 0 && strcmp(simplify_opts[k].key, simplify_opts[k - 1].key) == 0) continue;
+        names[n] = flag ? simplify_opts[k].flag : simplify_opts[k].key;
         used += (size_t)snprintf(list + used, used < sizeof list ? sizeof list - used : 0, "%s%s",
-                                 k ? ", " : "", names[k]);
+                                 n ? ", " : "", names[n]);
+        n++;
     }
-    names[N_SIMPLIFY_OPTS] = NULL;
+    names[n] = NULL;
     return fl_cli_unknown(flag ? "option" : "parameter", word, len, names, list);
 }
 

@@ -501,11 +501,11 @@ static void test_options(void) {
     CHECK(r.target == 80);
     CHECK(r.min_stretch == 0.2 && r.max_valence == 12 && r.max_size > 0 && r.tolerance > 0);
     CHECK(r.max_deviation < 0);
-    CHECK(r.fast_above < 0 && r.fast_collapses == 0); /* the paper's order: exact by default */
+    CHECK(r.fast_above == 3.0); /* the error order, the default: fast passes */
     femlod_mesh_free(out);
-    d.error_order = 1; /* the error order: fast passes by default */
+    d.error_order = -1; /* the paper's order: exact by default */
     CHECK(femlod_simplify(&out, NULL, m, &d, &r, &err) == FEMLOD_OK);
-    CHECK(r.fast_above == 3.0);
+    CHECK(r.fast_above < 0 && r.fast_collapses == 0);
     d.error_order = 0;
     femlod_mesh_free(out);
     /* switched off */

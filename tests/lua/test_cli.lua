@@ -401,7 +401,8 @@ do
     "simplified row: " .. tostring(lines[3]))
   local smin = tonumber(lines[3]:match("| 0%.%d%d%d, (0%.%d%d%d) |"))
   T.check(smin and smin >= 0.3, "the row shows stretch min >= 0.3: " .. tostring(smin))
-  T.check(lines[4]:find("^stop: target; %d+ collapses %(0 in the pre%-phase%) in [%d.]+ s$"), "stop line: " .. tostring(lines[4]))
+  T.check(lines[4]:find("^stop: target; %d+ collapses %(0 in the pre%-phase, %d+ in fast passes on %d threads?%) in [%d.]+ s$"),
+    "stop line: " .. tostring(lines[4]))
   T.check(lines[5]:find("^rejected: tolerance %d+, deviation 0, stretch %d+, size %d+, valence %d+, foldover %d+, "
     .. "topology %d+, intersection %d+$"), "rejected line: " .. tostring(lines[5]))
   T.eq(lines[6], "violating output: 0 triangles; dropped degenerate: 0", "violating line")
@@ -496,7 +497,7 @@ do
   end
   simplify_usage("femlod: unknown option '--bogus' (valid: --target, --ratio, --tolerance, --max-deviation, "
     .. "--min-stretch, --max-size, --max-valence, --feature-angle, --feature-weight, --max-normal-change, "
-    .. "--keep-boundary, --area-weighted, --error-order, --no-improve, --fast-above, --threads, --lock, --hierarchy, --hierarchy-floor)", "--bogus")
+    .. "--keep-boundary, --area-weighted, --error-order, --no-error-order, --no-improve, --fast-above, --threads, --lock, --hierarchy, --hierarchy-floor)", "--bogus")
   simplify_usage("femlod: --quiet is an option of femlod, not of simplify: put it before the command "
     .. "(femlod --quiet simplify ...)", "--target", "10", "--quiet")
   simplify_usage("femlod: unknown option '--targt'; did you mean --target?", "--targt", "10")

@@ -226,7 +226,7 @@ do
   T.eq(m2:counts().triangles, 3000, "meshes from h:mesh() are independent")
   -- report.stats prints it.
   local text = report.stats(s)
-  T.check(text:find("^stop: target; " .. s.collapses .. " collapses %(0 in the pre%-phase%) in [%d.]+ s\n"),
+  T.check(text:find("^stop: target; " .. s.collapses .. " collapses %(0 in the pre%-phase, %d+ in fast passes on %d threads?%) in [%d.]+ s\n"),
     "report.stats first line: " .. text)
   T.check(text:find("\nrejected: tolerance %d+, deviation 0, stretch %d+, size %d+, valence %d+, foldover %d+, "
     .. "topology %d+, intersection %d+\n"), "report.stats rejected line")
@@ -288,11 +288,14 @@ end
 
 -- {====== fast passes: the same guarantees, fewer exact collapses
 do
-  local exact = fandisk:simplify { target = 2000 }
+  local exact = fandisk:simplify { target = 2000, fast_above = false }
   local fast = fandisk:simplify { target = 2000, fast_above = 2 }
   local fast2 = fandisk:simplify { target = 2000, fast_above = true }
   local s, e = fast:stats(), exact:stats()
-  T.eq(e.fast_collapses, 0, "exact by default")
+  T.eq(e.fast_collapses, 0, "fast_above = false: the exact order")
+  T.check(fandisk:simplify { target = 2000 }:stats().fast_collapses > 0, "fast passes by default (the error order)")
+  T.eq(fandisk:simplify { target = 2000, error_order = false }:stats().fast_collapses, 0,
+    "the paper's order: exact by default")
   T.check(s.fast_collapses > 0 and s.fast_collapses < s.collapses,
     "fast_above = 2: " .. s.fast_collapses .. " of " .. s.collapses .. " collapses in passes")
   T.eq(fast2:stats().fast_collapses, s.fast_collapses, "fast_above = true is 2")
