@@ -115,7 +115,8 @@ static void run_meshopt(const femlod_mesh *in, size_t target) {
     femlod_mesh_free(out);
 }
 
-/* femlod with its defaults (exact order, one thread; the error order),
+/* femlod with its defaults (one thread; the error order with fast passes above
+ * 3 x target, the paper's order exact),
  * with max_deviation at rel times the bounding-box diagonal when rel > 0,
  * in the paper's order (error_order < 0) when paper */
 static void run_femlod(const femlod_mesh *in, size_t target, double rel, int paper) {
