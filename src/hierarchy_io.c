@@ -429,7 +429,7 @@ femlod_status femlod_hierarchy_load_memory(femlod_hierarchy **out, const void *b
     }
     {
         femlod_error e2;
-        st = femlod_hierarchy_create(&h, mesh, log, NULL, &e2);
+        st = femlod_hierarchy_create_from_log(&h, mesh, &log, NULL, &e2);
         if (st == FEMLOD_ENOMEM) goto nomem;
         if (st != FEMLOD_OK) {
             st = fl_error(err, FEMLOD_EPARSE, "%s: %s", path, e2.message);

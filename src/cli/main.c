@@ -1026,6 +1026,25 @@ static int cmd_simplify(lua_State *L, const cli *c) {
     lua_pushliteral(L, "femlod.report");
     lua_call(L, 1, 1);
     int report_mod = lua_gettop(L);
+    /* What the report needs of the hierarchy, then the hierarchy goes: the
+     * input's quality below builds its adjacency, which should not come on
+     * top of the hierarchy (on 1.25M triangles 270 + 110 MB). */
+    lua_getfield(L, report_mod, "stats");
+    lua_pushvalue(L, h);
+    lua_call(L, 1, 1);
+    int stats_line = lua_gettop(L);
+    lua_Integer counts[3] = {0, 0, 0};
+    if (!lua_isnil(L, flh)) {
+        call_method(L, h, "counts", 0, 1);
+        static const char *const keys[] = {"nodes", "input_vertices", "collapses"};
+        for (int k = 0; k < 3; k++) {
+            lua_getfield(L, -1, keys[k]);
+            counts[k] = lua_tointeger(L, -1);
+            lua_pop(L, 1);
+        }
+        lua_pop(L, 1);
+    }
+    call_method(L, h, "close", 0, 0);
     const char *name = base_name(in);
     lua_getfield(L, report_mod, "header");
     lua_call(L, 0, 1);
@@ -1039,25 +1058,16 @@ static int cmd_simplify(lua_State *L, const cli *c) {
         lua_call(L, 3, 1);
         printf("%s\n", lua_tostring(L, -1));
     }
-    lua_getfield(L, report_mod, "stats");
-    lua_pushvalue(L, h);
-    lua_call(L, 1, 1);
-    printf("%s\n", lua_tostring(L, -1));
+    printf("%s\n", lua_tostring(L, stats_line));
     call_method(L, result, "counts", 0, 1);
     lua_getfield(L, -1, "triangles");
     lua_getfield(L, -2, "vertices");
     femlod_format f = femlod_format_from_path(out);
     printf("%s: %lld triangles, %lld vertices (%s)\n", out, (long long)lua_tointeger(L, -2),
            (long long)lua_tointeger(L, -1), femlod_format_name(f));
-    if (!lua_isnil(L, flh)) {
-        call_method(L, h, "counts", 0, 1);
-        lua_getfield(L, -1, "nodes");
-        lua_getfield(L, -2, "input_vertices");
-        lua_getfield(L, -3, "collapses");
+    if (!lua_isnil(L, flh))
         printf("%s: %lld nodes: %lld input vertices, %lld collapses (hierarchy)\n",
-               lua_tostring(L, flh), (long long)lua_tointeger(L, -3),
-               (long long)lua_tointeger(L, -2), (long long)lua_tointeger(L, -1));
-    }
+               lua_tostring(L, flh), (long long)counts[0], (long long)counts[1], (long long)counts[2]);
     return EXIT_OK;
 }
 

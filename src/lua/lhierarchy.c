@@ -365,8 +365,10 @@ static int lib_simplify(lua_State *L) {
         pc.offset = pc.scale;
         pc.scale = 1.0 - pc.scale;
         pc.keep_going = 1;
-        st = femlod_hierarchy_create(&h->hier, mesh, log, &po, &err);
         h->log_bytes = femlod_collapse_log_bytes(log);
+        femlod_mesh_free(simplified); /* not needed for the build: gone before its peak */
+        simplified = NULL;
+        st = femlod_hierarchy_create_from_log(&h->hier, mesh, &log, &po, &err);
         h->has_result = 1;
     }
     *mbox = mesh;

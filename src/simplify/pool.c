@@ -11,7 +11,8 @@
  *                     compaction).
  *   fl_pool_helper_*  one long-lived thread that runs a job after each post
  *                     (the exact queue's ring re-evaluation): it spins
- *                     briefly, then sleeps until the next post.
+ *                     briefly (not on a loaded machine), then sleeps until
+ *                     the next post.
  *
  * Invariants: which thread runs an item never shows in a result (callers
  * give items disjoint writes and keep per-part results by part index, not
@@ -25,6 +26,7 @@
 #include <sched.h>
 #include <stdatomic.h>
 #include <stdlib.h>
+#include <unistd.h>
 
 #define POOL_MAX 16 /* threads at most */
 
@@ -144,12 +146,31 @@ void fl_pool_ranges(int nth, size_t n, fl_pool_range_fn fn, void *ctx) {
 
 /* {====== the helper thread
  *
- * It waits for a post by spinning briefly on a generation counter (4,000
- * pauses, about the time the main thread spends on the rest of a
- * collapse), then sleeps on a condition variable, so that it never keeps a
- * core from another process. `sleeping` is set under mu before the last
- * look at go, and a post signals under mu when it sees it set (both sides
- * sequentially consistent: one sees the other), so no post is missed. */
+ * It waits for a post by spinning on a generation counter, then sleeps on a
+ * condition variable, so that it never keeps a core from another process.
+ * `sleeping` is set under mu before the last look at go, and a post signals
+ * under mu when it sees it set (both sides sequentially consistent: one
+ * sees the other), so no post is missed.
+ *
+ * How long it spins is set when it starts, from the machine's load: 4,000
+ * pauses (about the rest of a collapse) while the 1-minute load average is
+ * under twice the online cores, none above. A spin saves a wake-up per
+ * collapse when a core is free (a spin of 100 pauses made cover 30%
+ * slower), but on a machine with more runnable threads than cores it took a
+ * third of the job's CPU and made the job slower (docs/performance.md
+ * "Threads and the exact finish"). Only the timing depends on it, never a
+ * result. -DFEMLOD_HELPER_SPIN=N fixes the spin at N pauses (experiments). */
+#ifndef FEMLOD_HELPER_SPIN
+#define FEMLOD_HELPER_SPIN -1 /* -1: from the load, as above */
+#endif
+
+static int helper_spin(void) {
+    if (FEMLOD_HELPER_SPIN >= 0) return FEMLOD_HELPER_SPIN;
+    double load;
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    if (cores < 1 || getloadavg(&load, 1) != 1) return 4000;
+    return load >= 2.0 * (double)cores ? 0 : 4000;
+}
 
 struct fl_pool_helper {
     void (*job)(void *);
@@ -160,6 +181,7 @@ struct fl_pool_helper {
     atomic_int sleeping;
     pthread_mutex_t mu;
     pthread_cond_t cv;
+    int spin; /* pauses before sleeping (helper_spin) */
 };
 
 static void *helper_main(void *arg) {
@@ -170,7 +192,7 @@ static void *helper_main(void *arg) {
         int spins = 0;
         while ((g = atomic_load(&h->go)) == seen) {
             if (atomic_load(&h->quit)) return NULL;
-            if (++spins < 4000) {
+            if (++spins < h->spin) {
                 cpu_relax();
                 continue;
             }
@@ -191,6 +213,7 @@ fl_pool_helper *fl_pool_helper_start(void (*job)(void *), void *arg) {
     if (!h) return NULL;
     h->job = job;
     h->arg = arg;
+    h->spin = helper_spin();
     atomic_init(&h->go, 0);
     atomic_init(&h->quit, 0);
     atomic_init(&h->sleeping, 0);

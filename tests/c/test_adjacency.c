@@ -4,7 +4,9 @@
 #include "check.h"
 #include "shapes.h"
 
+#include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 static femlod_topology topo(const femlod_mesh *m) {
     femlod_topology t;
@@ -140,8 +142,52 @@ static void test_random_against_brute_force(void) {
     }
 }
 
+/* fl_mean_edge_lengths against the mean over a built adjacency's sorted
+ * neighbours, bit for bit, on random meshes with repeated corners, repeated
+ * triangles and isolated vertices; the order of the sum is what a hierarchy's
+ * leaf sizes (and so every saved .flh) depend on. */
+static void test_mean_edge_lengths(void) {
+    unsigned seed = 777;
+    for (int round = 0; round < 60; round++) {
+        size_t nv = 4 + (size_t)(round % 23), nt = 1 + (size_t)(round * 11 % 70);
+        uint32_t *tri = malloc(3 * nt * sizeof *tri);
+        double *pos = malloc(3 * nv * sizeof *pos), *got = malloc(nv * sizeof *got);
+        double *want = malloc(nv * sizeof *want);
+        for (size_t i = 0; i < 3 * nt; i++) {
+            seed = seed * 1103515245u + 12345u;
+            tri[i] = (seed >> 16) % (uint32_t)(nv - 1); /* the last vertex is isolated */
+        }
+        for (size_t i = 0; i < 3 * nv; i++) {
+            seed = seed * 1103515245u + 12345u;
+            pos[i] = sin((double)(seed >> 8)) * 1e3 + 1.0 / (double)(1 + (seed >> 20));
+        }
+        fl_adjacency adj;
+        CHECK(fl_adjacency_build(&adj, tri, nt, nv, NULL) == FEMLOD_OK);
+        for (size_t v = 0; v < nv; v++) {
+            double sum = 0.0;
+            uint32_t n = adj.nbr_start[v + 1] - adj.nbr_start[v];
+            for (uint32_t k = adj.nbr_start[v]; k < adj.nbr_start[v + 1]; k++) {
+                const double *a = pos + 3 * v, *b = pos + 3 * (size_t)adj.vert_nbrs[k];
+                double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+                sum += sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            }
+            want[v] = n ? sum / n : 0.0;
+        }
+        memset(got, 0xAB, nv * sizeof *got);
+        CHECK(fl_mean_edge_lengths(pos, tri, nt, nv, got, NULL) == FEMLOD_OK);
+        CHECK(memcmp(got, want, nv * sizeof *got) == 0);
+        CHECK(got[nv - 1] == 0.0);
+        fl_adjacency_free(&adj);
+        free(tri);
+        free(pos);
+        free(got);
+        free(want);
+    }
+}
+
 int main(void) {
     test_shapes();
+    test_mean_edge_lengths();
     test_defects();
     test_random_against_brute_force();
     return check_report("adjacency");

@@ -12,6 +12,7 @@
 #include "meshcheck.h"
 #include "cad_shapes.h"
 #include "hierarchy.h"
+#include "simplify_log.h"
 #include "intersect.h"
 #include <time.h>
 #include <limits.h>
@@ -1071,6 +1072,82 @@ static femlod_region test_sphere(const femlod_mesh *in) {
  * cancel fails with FEMLOD_ECANCELLED, stops calling, and leaves a valid
  * hierarchy from which the same call without a callback finishes the work
  * exactly as one uninterrupted run. */
+static int vs_equal(const uint32_t *a, const uint32_t *b, size_t n) {
+    return n == 0 || memcmp(a, b, n * sizeof *a) == 0;
+}
+
+/* Two hierarchies equal array for array (the front in the same order). */
+static int same_hierarchy(const femlod_hierarchy *a, const femlod_hierarchy *b) {
+    if (a->nv != b->nv || a->nc != b->nc || a->nn != b->nn || a->nf_in != b->nf_in ||
+        a->nf != b->nf || a->binding != b->binding || a->front_n != b->front_n ||
+        a->active_n != b->active_n)
+        return 0;
+    size_t nn = a->nn, nc = a->nc, nf = a->nf, nvs = a->vstar_start[nc], nrem = a->removed_start[nc];
+    return memcmp(a->pos, b->pos, 3 * nn * sizeof *a->pos) == 0 &&
+           memcmp(a->e_size, b->e_size, nn * sizeof *a->e_size) == 0 &&
+           memcmp(a->parent, b->parent, nn * sizeof *a->parent) == 0 &&
+           memcmp(a->child, b->child, 2 * nc * sizeof *a->child) == 0 &&
+           memcmp(a->depth, b->depth, nn * sizeof *a->depth) == 0 &&
+           memcmp(a->vstar_start, b->vstar_start, (nc + 1) * sizeof *a->vstar_start) == 0 &&
+           vs_equal(a->vstars, b->vstars, nvs) && vs_equal(a->deps, b->deps, nvs) &&
+           memcmp(a->dep_start, b->dep_start, (nn + 1) * sizeof *a->dep_start) == 0 &&
+           memcmp(a->face_v, b->face_v, 3 * nf * sizeof *a->face_v) == 0 &&
+           memcmp(a->removed_start, b->removed_start, (nc + 1) * sizeof *a->removed_start) == 0 &&
+           vs_equal(a->removed, b->removed, nrem) &&
+           memcmp(a->created_start, b->created_start, (nc + 1) * sizeof *a->created_start) == 0 &&
+           memcmp(a->state, b->state, nn) == 0 &&
+           vs_equal(a->front, b->front, a->front_n) && vs_equal(a->active, b->active, a->active_n);
+}
+
+/* femlod_hierarchy_create_from_log builds what femlod_hierarchy_create
+ * builds from the same log, array for array, and frees the log: with the
+ * log extended past the target (the first front a prefix) and not, with the
+ * improvement stage's base mesh in the log, and when cancelled. */
+static void test_from_log(void) {
+    const char *names[] = {"fandisk.obj", "fandisk.obj", "cover.obj"};
+    const size_t targets[] = {1500, 1500, 4000};
+    for (int k = 0; k < 3; k++) {
+        femlod_mesh *in = load(names[k]), *out = NULL;
+        if (k == 2) { /* a sliver that breaks min_stretch: the improvement stage runs */
+            double *p = in->pos;
+            const uint32_t *t = in->tri;
+            for (int s = 0; s < 3; s++)
+                p[3 * t[0] + (size_t)s] = 0.5 * (p[3 * t[1] + (size_t)s] + p[3 * t[2] + (size_t)s]) +
+                                          0.01 * (p[3 * t[0] + (size_t)s] - p[3 * t[1] + (size_t)s]);
+        }
+        femlod_collapse_log *log = NULL;
+        femlod_simplify_options so = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+        so.target = targets[k];
+        so.hierarchy_floor = k == 1;
+        CHECK(femlod_simplify(&out, &log, in, &so, NULL, NULL) == FEMLOD_OK);
+        if (k == 1) CHECK(femlod_collapse_log_front(log) < femlod_collapse_log_count(log));
+        if (k == 2) CHECK(log->base != NULL);
+        femlod_hierarchy *ref = NULL, *h = NULL;
+        CHECK(femlod_hierarchy_create(&ref, in, log, NULL, NULL) == FEMLOD_OK);
+        CHECK(femlod_hierarchy_create_from_log(&h, in, &log, NULL, NULL) == FEMLOD_OK);
+        CHECK(log == NULL);
+        CHECK(ref && h && same_hierarchy(ref, h));
+        femlod_mesh *f = front_mesh(h);
+        CHECK(same_mesh(f, out));
+        femlod_mesh_free(f);
+        femlod_hierarchy_free(h);
+        femlod_hierarchy_free(ref);
+        if (k == 0) { /* cancelled: nothing made, the log freed all the same */
+            CHECK(femlod_simplify(&f, &log, in, &so, NULL, NULL) == FEMLOD_OK);
+            femlod_mesh_free(f);
+            check_progress stop = CHECK_PROGRESS_INIT;
+            stop.stop_at = 5;
+            femlod_progress_options po = {check_progress_fn, &stop};
+            femlod_error err;
+            h = NULL;
+            CHECK(femlod_hierarchy_create_from_log(&h, in, &log, &po, &err) == FEMLOD_ECANCELLED);
+            CHECK(h == NULL && log == NULL);
+        }
+        femlod_mesh_free(out);
+        femlod_mesh_free(in);
+    }
+}
+
 static void test_progress(void) {
     femlod_mesh *in = load("fandisk.obj"), *out = NULL;
     femlod_collapse_log *log = NULL;
@@ -1254,6 +1331,7 @@ int main(void) {
     }
     test_checker();
     test_progress();
+    test_from_log();
     test_refine_ball();
     test_curvature_lod();
     test_refine_region("fandisk.obj", 1500, 0);
