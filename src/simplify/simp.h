@@ -307,6 +307,7 @@ typedef struct simp {
     size_t collapses, prephase;
     size_t rejected[FEMLOD_REJECT_COUNT];
     int binding;        /* the check that refused most in the finish's last round (simplify.c) */
+    size_t last_rejected[FEMLOD_REJECT_COUNT]; /* the finish's last round's refusals by check (simplify.c) */
     size_t prog_target; /* the count progress is measured towards: target, or the floor past it */
     int oom;
     int cancelled;  /* the progress callback asked to stop during evaluate_all */

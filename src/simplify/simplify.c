@@ -304,6 +304,7 @@ static int finish(simp *S, const femlod_simplify_options *o, size_t live0, size_
     /* the check that refused most in the last round */
     S->binding = FEMLOD_REJECT_COUNT;
     size_t most = 0;
+    for (int k = 0; k < FEMLOD_REJECT_COUNT; k++) S->last_rejected[k] = S->rejected[k] - before[k];
     for (int k = 0; k < FEMLOD_REJECT_COUNT; k++)
         if (S->rejected[k] - before[k] > most) {
             most = S->rejected[k] - before[k];
@@ -456,8 +457,9 @@ static femlod_status simplify_core(femlod_mesh **out, femlod_collapse_log **out_
     femlod_mesh *m = NULL;
     double t5 = now_seconds();
     (void)t5;
-    size_t out_collapses = S->collapses, out_rejected[FEMLOD_REJECT_COUNT];
+    size_t out_collapses = S->collapses, out_rejected[FEMLOD_REJECT_COUNT], stop_rejected[FEMLOD_REJECT_COUNT];
     memcpy(out_rejected, S->rejected, sizeof out_rejected);
+    memcpy(stop_rejected, S->last_rejected, sizeof stop_rejected);
     if (r == 0 || make_output(S, &m, S->log) != FEMLOD_OK) {
         femlod_collapse_log_free(S->log);
         simp_free(S);
@@ -516,6 +518,7 @@ static femlod_status simplify_core(femlod_mesh **out, femlod_collapse_log **out_
         result->prephase_collapses = S->prephase;
         result->fast_collapses = S->swept;
         memcpy(result->rejected, out_rejected, sizeof result->rejected);
+        if (why == FEMLOD_STOP_NO_VALID_EDGE) memcpy(result->stop_rejected, stop_rejected, sizeof stop_rejected);
         result->hierarchy_triangles = S->live;
         result->hierarchy_stop = hwhy;
         result->hierarchy_binding = S->log ? S->log->binding : FEMLOD_REJECT_COUNT;
@@ -599,6 +602,70 @@ static femlod_improve_options improve_options(const femlod_simplify_options *o, 
     return io;
 }
 
+static int cmp_point(const void *a, const void *b) {
+    const double *x = a, *y = b;
+    for (int k = 0; k < 3; k++)
+        if (x[k] != y[k]) return x[k] < y[k] ? -1 : 1;
+    return 0;
+}
+
+typedef struct lock_points {
+    double *p; /* sorted positions of the locked input vertices */
+    size_t n;
+    femlod_lock_fn fn; /* and the options' lock function (NULL: none) */
+    void *payload;
+} lock_points;
+
+static int locked_at(void *payload, double x, double y, double z) {
+    const lock_points *L = payload;
+    if (L->fn && L->fn(L->payload, x, y, z)) return 1;
+    double q[3] = {x, y, z};
+    return L->n && bsearch(q, L->p, L->n, 3 * sizeof *L->p, cmp_point) != NULL;
+}
+
+/* The honest count (docs/design.md "What remains, and why"): the output's
+ * elements that break a threshold, by reason, from femlod_improve_census
+ * with the simplification's thresholds; locked input vertices are the
+ * output's at their positions (they never move). Runs only when the output
+ * breaks a threshold. */
+static femlod_status census_into(femlod_simplify_result *r, const femlod_mesh *m, const femlod_mesh *input,
+                                 const femlod_simplify_options *o, femlod_error *err) {
+    memset(r->violating_by, 0, sizeof r->violating_by);
+    memset(r->violating_valence_by, 0, sizeof r->violating_valence_by);
+    r->violating_valence = 0;
+    r->corner_angle_min = r->corner_angle_max = 0.0;
+    femlod_status st = FEMLOD_OK;
+    int bad = breaks_threshold(m, o, &st, err);
+    if (st != FEMLOD_OK || !bad) return st;
+    femlod_improve_options io = improve_options(o, 1);
+    io.lock = NULL;
+    io.lock_count = 0;
+    io.progress = NULL;
+    lock_points L = {NULL, 0, o->lock_fn, o->lock_payload};
+    if (o->lock_count) {
+        L.p = fl_alloc(3 * o->lock_count, sizeof *L.p);
+        if (!L.p) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+        for (size_t i = 0; i < o->lock_count; i++)
+            if (o->lock[i] < input->nv) memcpy(L.p + 3 * L.n++, input->pos + 3 * (size_t)o->lock[i], 3 * sizeof *L.p);
+        qsort(L.p, L.n, 3 * sizeof *L.p, cmp_point);
+    }
+    if (L.n || L.fn) {
+        io.lock_fn = locked_at;
+        io.lock_payload = &L;
+    }
+    femlod_improve_report rep;
+    st = femlod_improve_census(m, &io, &rep, err);
+    free(L.p);
+    if (st != FEMLOD_OK) return st;
+    r->violating_input = rep.violating;
+    memcpy(r->violating_by, rep.violating_by, sizeof r->violating_by);
+    r->violating_valence = rep.valence_out;
+    memcpy(r->violating_valence_by, rep.valence_by, sizeof r->violating_valence_by);
+    r->corner_angle_min = rep.corner_angle_min;
+    r->corner_angle_max = rep.corner_angle_max;
+    return FEMLOD_OK;
+}
+
 static size_t report_ops(const femlod_improve_report *r) {
     return r->flips + r->splits + r->collapses + r->relaxations;
 }
@@ -618,8 +685,19 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
     int run = !o->no_improve && !o->keep_boundary && breaks_threshold(mesh, o, &st, err);
     if (st != FEMLOD_OK) return st;
     int polish_on = !o->no_improve && !o->keep_boundary && !out_log && o->max_deviation <= 0.0 && !o->lock_count;
-    if (!run && !polish_on)
-        return simplify_core(out, out_log, mesh, options, result, err);
+    if (!run && !polish_on) {
+        st = simplify_core(out, out_log, mesh, options, result, err);
+        if (st == FEMLOD_OK && result) st = census_into(result, *out, mesh, o, err);
+        if (st != FEMLOD_OK && *out) {
+            femlod_mesh_free(*out);
+            *out = NULL;
+            if (out_log) {
+                femlod_collapse_log_free(*out_log);
+                *out_log = NULL;
+            }
+        }
+        return st;
+    }
     femlod_mesh *better = NULL;
     femlod_improve_report rep;
     memset(&rep, 0, sizeof rep);
@@ -722,6 +800,15 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
         result->violating_input = bad;
         result->triangles = m->nt;
         result->vertices = m->nv;
+        st = census_into(result, m, mesh, o, err);
+        if (st != FEMLOD_OK) {
+            femlod_mesh_free(m);
+            if (out_log) {
+                femlod_collapse_log_free(*out_log);
+                *out_log = NULL;
+            }
+            return st;
+        }
         result->seconds = now_seconds() - t0;
     }
     *out = m;
