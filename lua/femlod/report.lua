@@ -223,11 +223,12 @@ function M.reasons(by, s)
   return " (" .. concat(parts, "; ") .. ")"
 end
 
--- Four lines, five when the improve stage ran: why and after how much work
--- it stopped, what the improve stage did, which checks refused collapses
--- (counts of edge evaluations), the output triangles left breaking a
--- threshold, and the thresholds in force ("off" when switched off, target
--- "none" when there was none).
+-- Why and after how much work it stopped; what the improve stage did (when
+-- it ran); at a stop with no valid edge, the checks refusing the edges left
+-- (each once); which checks refused collapses (counts of edge evaluations);
+-- the output triangles left breaking a threshold, by reason (and vertices
+-- above max_valence, when any); the thresholds in force ("off" when
+-- switched off, target "none" when there was none).
 function M.stats(s)
   s = stats_of(s, "stats")
   local rej, th = {}, {}

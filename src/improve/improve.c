@@ -209,15 +209,31 @@ static int fix_face(run *R, uint32_t f) {
     sub3(ab, pb, pa);
     sub3(ac, pc, pa);
     double s = dot3(ab, ac) / dot3(ab, ab);
-    if (s > 0.1 && s < 0.9 && M->vclass[c] == IM_FREE) {
+    int reach = 1;
+    if (s > 0.1 && s < 0.9 && M->vclass[c] != IM_FREE) {
+        /* an apex that cannot move (a band between feature lines): only
+         * halvings along ab make the band's triangles round, about
+         * log2(|ab| / height) of them; past the depth bound they would
+         * only make more needles */
+        double h2 = 0.0;
+        for (int k = 0; k < 3; k++) h2 += (pc[k] - pa[k] - s * ab[k]) * (pc[k] - pa[k] - s * ab[k]);
+        unsigned d = M->vdepth[a] > M->vdepth[b] ? M->vdepth[a] : M->vdepth[b];
+        double need = 0.5 * log2(dot3(ab, ab) / fmax(h2, 1e-300));
+        if (!((double)d + need <= (double)IM_MAX_DEPTH / 2)) {
+            reach = 0;
+            why = FEMLOD_IMPROVE_DEPTH;
+        }
+    }
+    if (s > 0.1 && s < 0.9 && reach) {
         double foot[3];
         for (int k = 0; k < 3; k++) foot[k] = pa[k] + s * ab[k];
         if (fl_imop_split(C, a, b, foot, &w)) {
             R->budget--;
             uint32_t m = (uint32_t)M->nv - 1;
-            /* the apex onto the foot; without it, the halves are left to the
-             * next operators */
-            fl_imop_collapse(C, c, m, &w);
+            /* the apex onto the foot; without it (an apex on a feature line
+             * or fixed: a band between two lines), the halves are left to
+             * the next operators, which halve them along the lines */
+            if (M->vclass[c] == IM_FREE) fl_imop_collapse(C, c, m, &w);
             return 1;
         }
         why = w;
