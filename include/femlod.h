@@ -597,10 +597,19 @@ typedef struct femlod_simplify_result {
     size_t violating_valence;
     size_t violating_valence_by[FEMLOD_IMPROVE_REASON_COUNT];
     double corner_angle_min, corner_angle_max;
-    /* With stop_reason no_valid_edge: the last full evaluation's refusals,
-     * each remaining edge once, by first failing check: which threshold
-     * binds at the stop. Not stored in a saved hierarchy. */
+    /* With stop_reason no_valid_edge: one more evaluation of every edge
+     * left, after the stop, by first failing check (each edge once): which
+     * threshold binds at the stop; stop_taken: the edges that pass it, which
+     * the checks made when an edge is taken from the queue (intersection,
+     * deviation) refuse. Zero otherwise; not stored in a saved hierarchy. */
     size_t stop_rejected[FEMLOD_REJECT_COUNT];
+    size_t stop_taken;
+    /* Of stop_rejected's topology: the edges refused as non-manifold [0],
+     * for the features (two fixed ends, or a feature vertex that would leave
+     * its line or merge lines) [1], and as interior edges between two
+     * boundary vertices [2]; the rest failed the link condition or the
+     * ring's checks. */
+    size_t stop_topology[3];
     size_t dropped_degenerate;     /* input triangles with a repeated vertex index, not kept */
     double seconds;                /* wall time (never influences the result) */
     /* The thresholds in force, defaults resolved; FEMLOD_SIMPLIFY_OFF when off. */

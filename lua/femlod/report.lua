@@ -258,8 +258,23 @@ function M.stats(s)
       n = n + c
       if c > 0 then by[#by + 1] = { k, c } end
     end
+    -- the edges that pass it fail the checks made when taken from the queue
+    if (s.stop_taken or 0) > 0 then
+      n = n + s.stop_taken
+      by[#by + 1] = { "intersection or deviation", s.stop_taken }
+    end
     sort(by, function(a, b) return a[2] > b[2] or (a[2] == b[2] and a[1] < b[1]) end)
-    for i, e in ipairs(by) do by[i] = format("%s %d", e[1], e[2]) end
+    local st = s.stop_topology
+    for i, e in ipairs(by) do
+      by[i] = format("%s %d", e[1], e[2])
+      if e[1] == "topology" and st then
+        local parts = {}
+        for _, k in ipairs({ "features", "link", "boundary", "nonmanifold" }) do
+          if (st[k] or 0) > 0 then parts[#parts + 1] = format("%s %d", k, st[k]) end
+        end
+        if #parts > 0 then by[i] = by[i] .. " (" .. concat(parts, ", ") .. ")" end
+      end
+    end
     if n > 0 then
       lines[#lines + 1] = format("stopped at %d: each of the %s left breaks a check: %s", s.triangles,
         plural(n, "edge"), concat(by, ", "))

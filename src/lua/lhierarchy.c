@@ -1262,6 +1262,15 @@ static int hierarchy_stats(lua_State *L) {
         for (int k = 0; k < FEMLOD_REJECT_COUNT; k++)
             set_integer(L, femlod_reject_name((femlod_reject)k), r->stop_rejected[k]);
         lua_setfield(L, -2, "stop_rejected");
+        size_t t = r->stop_rejected[FEMLOD_REJECT_TOPOLOGY], a = r->stop_topology[0], b = r->stop_topology[1],
+               c = r->stop_topology[2];
+        lua_createtable(L, 0, 4);
+        set_integer(L, "nonmanifold", a);
+        set_integer(L, "features", b);
+        set_integer(L, "boundary", c);
+        set_integer(L, "link", t >= a + b + c ? t - a - b - c : 0);
+        lua_setfield(L, -2, "stop_topology");
+        set_integer(L, "stop_taken", r->stop_taken);
     }
     set_integer(L, "dropped_degenerate", r->dropped_degenerate);
     lua_pushboolean(L, r->improved);

@@ -304,7 +304,6 @@ static int finish(simp *S, const femlod_simplify_options *o, size_t live0, size_
     /* the check that refused most in the last round */
     S->binding = FEMLOD_REJECT_COUNT;
     size_t most = 0;
-    for (int k = 0; k < FEMLOD_REJECT_COUNT; k++) S->last_rejected[k] = S->rejected[k] - before[k];
     for (int k = 0; k < FEMLOD_REJECT_COUNT; k++)
         if (S->rejected[k] - before[k] > most) {
             most = S->rejected[k] - before[k];
@@ -421,6 +420,30 @@ static void release_freed_memory(size_t triangles) {
 #endif
 }
 
+/* At a stop with no valid edge: one more evaluation of every live edge
+ * (the heap is empty), its refusals by first failing check into rej, each
+ * edge once; *taken gets the edges that pass that evaluation, which the
+ * checks made when an edge is taken from the queue (intersection,
+ * deviation) then refused; topo gets the edges refused by gather's first
+ * topology checks, by kind. The run's own counts (S->rejected) are left as
+ * they were, and the edges queued again are taken out. 0 on ENOMEM. */
+static int stop_count(simp *S, const femlod_simplify_options *o, size_t rej[FEMLOD_REJECT_COUNT], size_t *taken,
+                      size_t topo[3]) {
+    size_t before[FEMLOD_REJECT_COUNT];
+    memcpy(before, S->rejected, sizeof before);
+    *taken = fl_simp_evaluate_all(S, o, 1.0);
+    if (S->oom) return 0;
+    for (int k = 0; k < FEMLOD_REJECT_COUNT; k++) rej[k] = S->rejected[k] - before[k];
+    memcpy(S->rejected, before, sizeof before);
+    for (size_t e = 0; e < S->ne; e++) {
+        if (fl_heap_contains(&S->heap, (uint32_t)e)) fl_heap_remove(&S->heap, (uint32_t)e);
+        if (S->edge[e].flag & E_DEAD) continue;
+        int k = fl_simp_topology_kind(S, (uint32_t)e);
+        if (k >= 0) topo[k]++;
+    }
+    return 1;
+}
+
 static femlod_status simplify_core(femlod_mesh **out, femlod_collapse_log **out_log, const femlod_mesh *mesh,
                                    const femlod_simplify_options *options, femlod_simplify_result *result,
                                    femlod_error *err) {
@@ -457,9 +480,12 @@ static femlod_status simplify_core(femlod_mesh **out, femlod_collapse_log **out_
     femlod_mesh *m = NULL;
     double t5 = now_seconds();
     (void)t5;
-    size_t out_collapses = S->collapses, out_rejected[FEMLOD_REJECT_COUNT], stop_rejected[FEMLOD_REJECT_COUNT];
+    size_t out_collapses = S->collapses, out_rejected[FEMLOD_REJECT_COUNT];
     memcpy(out_rejected, S->rejected, sizeof out_rejected);
-    memcpy(stop_rejected, S->last_rejected, sizeof stop_rejected);
+    size_t stop_rejected[FEMLOD_REJECT_COUNT] = {0}, stop_topology[3] = {0}, stop_taken = 0;
+    if (r == 1 && why == FEMLOD_STOP_NO_VALID_EDGE && result &&
+        !stop_count(S, o, stop_rejected, &stop_taken, stop_topology))
+        r = 0;
     if (r == 0 || make_output(S, &m, S->log) != FEMLOD_OK) {
         femlod_collapse_log_free(S->log);
         simp_free(S);
@@ -518,7 +544,9 @@ static femlod_status simplify_core(femlod_mesh **out, femlod_collapse_log **out_
         result->prephase_collapses = S->prephase;
         result->fast_collapses = S->swept;
         memcpy(result->rejected, out_rejected, sizeof result->rejected);
-        if (why == FEMLOD_STOP_NO_VALID_EDGE) memcpy(result->stop_rejected, stop_rejected, sizeof stop_rejected);
+        memcpy(result->stop_rejected, stop_rejected, sizeof stop_rejected);
+        memcpy(result->stop_topology, stop_topology, sizeof stop_topology);
+        result->stop_taken = stop_taken;
         result->hierarchy_triangles = S->live;
         result->hierarchy_stop = hwhy;
         result->hierarchy_binding = S->log ? S->log->binding : FEMLOD_REJECT_COUNT;

@@ -258,6 +258,21 @@ static void simplify_case(const char *name, const femlod_mesh *m) {
     CHECK(xo <= xi);
     int near = (double)out->nt <= 1.02 * (double)res.target;
     CHECK(near || res.stop_reason == FEMLOD_STOP_NO_VALID_EDGE);
+    /* a stop with no valid edge is stated: every edge left once, by the
+     * check that refuses it (the polish may change the edges after: only
+     * the simplification's own output is counted) */
+    if (res.stop_reason == FEMLOD_STOP_NO_VALID_EDGE) {
+        size_t ne = res.stop_taken;
+        for (int k = 0; k < FEMLOD_REJECT_COUNT; k++) ne += res.stop_rejected[k];
+        CHECK(ne > 0);
+        CHECK(res.stop_topology[0] + res.stop_topology[1] + res.stop_topology[2] <=
+              res.stop_rejected[FEMLOD_REJECT_TOPOLOGY]);
+        if (res.polish_operations == 0) CHECK(ne == to.edges);
+    } else {
+        size_t ne = res.stop_taken;
+        for (int k = 0; k < FEMLOD_REJECT_COUNT; k++) ne += res.stop_rejected[k];
+        CHECK(ne == 0);
+    }
     /* with a log (no polish then): the hierarchy is built on the stage's
      * mesh; its first front is the mesh returned and refine(0) gives the
      * stage's mesh, not the raw input */
