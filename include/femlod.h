@@ -517,7 +517,9 @@ typedef struct femlod_simplify_options {
      * mesh; the collapse log's node ids 0..V-1 are then that mesh's
      * vertices (femlod_collapse_log_base), and without a log a short polish
      * (two rounds of the stage, with its default deviation bound, skipped
-     * when max_deviation is given) runs on the output. Skipped with
+     * when max_deviation is given; without splits when its splits would
+     * take the least stretch below both min_stretch and the output's own)
+     * runs on the output. Skipped with
      * keep_boundary. Nonzero: neither runs. An input that breaks no
      * threshold gives the same output either way. */
     int no_improve;

@@ -490,26 +490,34 @@ static void census_count(run *R, const census_list *L, femlod_improve_report *re
 }
 
 static femlod_status improve_run(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
-                                 femlod_improve_report *report, uint32_t *vmap, int census_only, femlod_error *err);
+                                 femlod_improve_report *report, uint32_t *vmap, int census_only, int no_split,
+                                 femlod_error *err);
 
 femlod_status femlod_improve(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
                              femlod_improve_report *report, femlod_error *err) {
-    return improve_run(out, mesh, options, report, NULL, 0, err);
+    return improve_run(out, mesh, options, report, NULL, 0, 0, err);
 }
 
 femlod_status fl_improve_mapped(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
                                 femlod_improve_report *report, uint32_t *vmap, femlod_error *err) {
-    return improve_run(out, mesh, options, report, vmap, 0, err);
+    return improve_run(out, mesh, options, report, vmap, 0, 0, err);
+}
+
+femlod_status fl_improve_no_split(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
+                                  femlod_improve_report *report, femlod_error *err) {
+    return improve_run(out, mesh, options, report, NULL, 0, 1, err);
 }
 
 femlod_status femlod_improve_census(const femlod_mesh *mesh, const femlod_improve_options *options,
                                     femlod_improve_report *report, femlod_error *err) {
-    return improve_run(NULL, mesh, options, report, NULL, 1, err);
+    return improve_run(NULL, mesh, options, report, NULL, 1, 0, err);
 }
 
-/* census_only: one round on a working copy, no output (femlod_improve_census) */
+/* census_only: one round on a working copy, no output (femlod_improve_census);
+ * no_split: no split is made (fl_improve_no_split) */
 static femlod_status improve_run(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
-                                 femlod_improve_report *report, uint32_t *vmap, int census_only, femlod_error *err) {
+                                 femlod_improve_report *report, uint32_t *vmap, int census_only, int no_split,
+                                 femlod_error *err) {
     double t0 = wall();
     femlod_improve_options o = FEMLOD_IMPROVE_OPTIONS_INIT;
     if (options) o = *options;
@@ -592,7 +600,7 @@ static femlod_status improve_run(femlod_mesh **out, const femlod_mesh *mesh, con
     R.C.M = &M;
     R.C.S = &S;
     R.C.p = &p;
-    R.budget = 4 * mesh->nt + 1024;
+    R.budget = no_split ? 0 : 4 * mesh->nt + 1024;
     fl_progress prog;
     fl_progress_init(&prog, o.progress, o.progress_payload, (size_t)rounds);
     int nothing = c.st == 0 && c.sz == 0 && c.val == 0;

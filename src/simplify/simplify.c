@@ -802,7 +802,19 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
                 return st;
             }
             if (pr.stretch_min < pr.stretch_min_in && pr.stretch_min < pr.min_stretch) {
-                femlod_mesh_free(p); /* as before the simplification: never below both */
+                /* as before the simplification: never below both; then the
+                 * polish without splits, whose changes each raise the
+                 * least stretch where they act */
+                femlod_mesh_free(p);
+                p = NULL;
+                st = fl_improve_no_split(&p, m, &io, &pr, err);
+                if (st != FEMLOD_OK) {
+                    femlod_mesh_free(m);
+                    return st;
+                }
+            }
+            if (pr.stretch_min < pr.stretch_min_in && pr.stretch_min < pr.min_stretch) {
+                femlod_mesh_free(p);
             } else {
                 femlod_mesh_free(m);
                 m = p;
