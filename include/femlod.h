@@ -518,7 +518,9 @@ typedef struct femlod_simplify_options {
      * mesh; the collapse log's node ids 0..V-1 are then that mesh's
      * vertices (femlod_collapse_log_base), and without a log a short polish
      * (two rounds of the stage, with its default deviation bound, skipped
-     * when max_deviation is given) runs on the output. Skipped with
+     * when max_deviation is given; without splits when its splits would
+     * take the least stretch below both min_stretch and the output's own)
+     * runs on the output. Skipped with
      * keep_boundary. Nonzero: neither runs. An input that breaks no
      * threshold gives the same output either way. */
     int no_improve;
@@ -552,6 +554,31 @@ typedef enum femlod_reject {
  * "topology", "intersection". */
 const char *femlod_reject_name(femlod_reject reason);
 
+/* Why an element still breaks a threshold: what the geometry forces
+ * (corner, boundary), or else the first failing check of the last change
+ * that would have removed it (docs/design.md "What remains, and why").
+ * Forced means no local operator can remove it without breaking a feature,
+ * boundary or corner: a triangle whose two edges at a vertex are both
+ * feature (boundary) edges meeting at an angle a where no triangle with an
+ * angle a reaches min_stretch (a <= 7.0 degrees at min_stretch 0.2); a
+ * vertex where more feature edges meet than max_valence. */
+typedef enum femlod_improve_reason {
+    FEMLOD_IMPROVE_CORNER = 0,    /* forced: at a corner of feature lines too sharp for min_stretch, or
+                                     a vertex with more feature edges than max_valence */
+    FEMLOD_IMPROVE_FIXED,         /* the operators it needs move a corner or locked vertex */
+    FEMLOD_IMPROVE_DEVIATION,     /* every fix leaves max_deviation */
+    FEMLOD_IMPROVE_STRETCH,       /* no operator raises the least stretch around it */
+    FEMLOD_IMPROVE_VALENCE,       /* every fix raises a valence past max_valence */
+    FEMLOD_IMPROVE_FOLDOVER,      /* every fix turns a face past max_normal_change */
+    FEMLOD_IMPROVE_TOPOLOGY,      /* every fix breaks the link condition, a feature or a boundary */
+    FEMLOD_IMPROVE_INTERSECTION,  /* every fix makes a new self-intersection */
+    FEMLOD_IMPROVE_UNTRIED,       /* the rounds ran out before any operator was tried */
+    FEMLOD_IMPROVE_DEPTH,         /* every fix splits an edge cut from an input edge too often */
+    FEMLOD_IMPROVE_BOUNDARY,      /* forced: as corner, the two edges being boundary edges */
+    FEMLOD_IMPROVE_FIXABLE,       /* census only: an operator changes it; no stage ran on this mesh */
+    FEMLOD_IMPROVE_REASON_COUNT
+} femlod_improve_reason;
+
 typedef struct femlod_simplify_result {
     size_t triangles;              /* in the output */
     size_t vertices;               /* in the output */
@@ -563,9 +590,29 @@ typedef struct femlod_simplify_result {
      * each time its neighbourhood changes, so these count evaluations, not
      * edges: they tell which threshold binds. */
     size_t rejected[FEMLOD_REJECT_COUNT];
-    /* Output triangles that break min_stretch or max_size: input triangles no
-     * valid collapse could remove (created triangles never do). */
+    /* Output triangles that break min_stretch or max_size (after the
+     * improvement stage and polish: what they left), and by reason
+     * (femlod_improve_census on the output; sums to violating_input); the
+     * output's vertices above max_valence, by reason; the forced corners'
+     * angles, degrees (0: none). Not stored in a saved hierarchy. */
     size_t violating_input;
+    size_t violating_by[FEMLOD_IMPROVE_REASON_COUNT];
+    size_t violating_valence;
+    size_t violating_valence_by[FEMLOD_IMPROVE_REASON_COUNT];
+    double corner_angle_min, corner_angle_max;
+    /* With stop_reason no_valid_edge: one more evaluation of every edge
+     * left, after the stop, by first failing check (each edge once): which
+     * threshold binds at the stop; stop_taken: the edges that pass it, which
+     * the checks made when an edge is taken from the queue (intersection,
+     * deviation) refuse. Zero otherwise; not stored in a saved hierarchy. */
+    size_t stop_rejected[FEMLOD_REJECT_COUNT];
+    size_t stop_taken;
+    /* Of stop_rejected's topology: the edges refused as non-manifold [0],
+     * for the features (two fixed ends, or a feature vertex that would leave
+     * its line or merge lines) [1], and as interior edges between two
+     * boundary vertices [2]; the rest failed the link condition or the
+     * ring's checks. */
+    size_t stop_topology[3];
     size_t dropped_degenerate;     /* input triangles with a repeated vertex index, not kept */
     double seconds;                /* wall time (never influences the result) */
     /* The thresholds in force, defaults resolved; FEMLOD_SIMPLIFY_OFF when off. */
@@ -965,25 +1012,16 @@ typedef struct femlod_improve_options {
 } femlod_improve_options;
 #define FEMLOD_IMPROVE_OPTIONS_INIT {0.0, 0.0, 0, 0.0, 0.0, 0.0, 0, NULL, 0, NULL, NULL, NULL, NULL}
 
-/* Why an element still breaks a threshold: the first failing check of the
- * last change that would have removed it, or what the geometry forces. */
-typedef enum femlod_improve_reason {
-    FEMLOD_IMPROVE_CORNER = 0,    /* its sharpest angle lies between two feature edges */
-    FEMLOD_IMPROVE_FIXED,         /* the operators it needs move a corner or locked vertex */
-    FEMLOD_IMPROVE_DEVIATION,     /* every fix leaves max_deviation */
-    FEMLOD_IMPROVE_STRETCH,       /* no operator raises the least stretch around it */
-    FEMLOD_IMPROVE_VALENCE,       /* every fix raises a valence past max_valence */
-    FEMLOD_IMPROVE_FOLDOVER,      /* every fix turns a face past max_normal_change */
-    FEMLOD_IMPROVE_TOPOLOGY,      /* every fix breaks the link condition, a feature or a boundary */
-    FEMLOD_IMPROVE_INTERSECTION,  /* every fix makes a new self-intersection */
-    FEMLOD_IMPROVE_UNTRIED,       /* the rounds ran out before any operator was tried */
-    FEMLOD_IMPROVE_DEPTH,         /* every fix splits an edge cut from an input edge too often */
-    FEMLOD_IMPROVE_REASON_COUNT
-} femlod_improve_reason;
 
 /* "corner", "fixed", "deviation", "stretch", "valence", "foldover",
- * "topology", "intersection", "untried", "depth". */
+ * "topology", "intersection", "untried", "depth", "boundary", "fixable". */
 const char *femlod_improve_reason_name(femlod_improve_reason reason);
+/* 1 for the reasons the geometry forces (corner, boundary). */
+int femlod_improve_reason_forced(femlod_improve_reason reason);
+/* The largest stretch of any triangle with an angle of the given degrees
+ * (in (0, 180)): a corner of feature lines meeting at it forces a triangle
+ * below min_stretch when this is below min_stretch. */
+double femlod_stretch_bound(double angle_degrees);
 
 typedef struct femlod_improve_report {
     size_t triangles_in, vertices_in, triangles, vertices;
@@ -999,6 +1037,12 @@ typedef struct femlod_improve_report {
     size_t stretch_by[FEMLOD_IMPROVE_REASON_COUNT];
     size_t size_by[FEMLOD_IMPROVE_REASON_COUNT];
     size_t valence_by[FEMLOD_IMPROVE_REASON_COUNT];
+    /* the output's triangles breaking min_stretch or max_size, each once,
+     * by reason (sums to violating); the forced ones' corner angles,
+     * degrees (0 when none) */
+    size_t violating;
+    size_t violating_by[FEMLOD_IMPROVE_REASON_COUNT];
+    double corner_angle_min, corner_angle_max;
     /* refused changes by first failing check */
     size_t refused[FEMLOD_IMPROVE_REASON_COUNT];
     double stretch_min_in, stretch_min; /* least stretch, input and output */
@@ -1016,6 +1060,14 @@ typedef struct femlod_improve_report {
 femlod_status femlod_improve(femlod_mesh **out, const femlod_mesh *mesh,
                              const femlod_improve_options *options,
                              femlod_improve_report *report, femlod_error *err);
+/* What in mesh breaks a threshold, and why, without changing it: the
+ * report's *_out, *_by, violating and corner angles for mesh itself (the
+ * other counts as for a stage that made no change). The forced classes come
+ * from its geometry; each other element gets the refusal of one try of the
+ * operators on a working copy (options.max_rounds is ignored), or fixable
+ * when the try changed it. */
+femlod_status femlod_improve_census(const femlod_mesh *mesh, const femlod_improve_options *options,
+                                    femlod_improve_report *report, femlod_error *err);
 
 /* }==================================================================== */
 

@@ -104,8 +104,9 @@ local function histogram_lines(h, out)
 end
 
 -- max_deviation (optional): the bound the mesh was made with; a measured
--- deviation above it is flagged.
-function M.text(q, name, max_deviation)
+-- deviation above it is flagged. remaining (optional): a line on what breaks
+-- a threshold and why (report() gives it from mesh:census).
+function M.text(q, name, max_deviation, remaining)
   q = quality_of(q, "text")
   check_string(name, 2, "text")
   local out = {}
@@ -138,6 +139,7 @@ function M.text(q, name, max_deviation)
         or "within max_deviation %s (%.3g of it)", num(max_deviation), q.hausdorff / max_deviation)
     end
   end
+  if type(remaining) == "string" then line("breaking", "%s", remaining) end
   out[#out + 1] = "  stretch histogram:"
   histogram_lines(q.histogram, out)
   return concat(out, "\n")
@@ -186,11 +188,47 @@ local function stats_of(s, fname)
   return s
 end
 
--- Four lines, five when the improve stage ran: why and after how much work
--- it stopped, what the improve stage did, which checks refused collapses
--- (counts of edge evaluations), the output triangles left breaking a
--- threshold, and the thresholds in force ("off" when switched off, target
--- "none" when there was none).
+local REASONS = { "corner", "boundary", "fixed", "deviation", "stretch", "valence", "foldover",
+  "topology", "intersection", "depth", "untried", "fixable" }
+local FORCED = { corner = true, boundary = true }
+
+-- " (forced 2: corner 2 at 6.5-6.9 degrees; fixable 3, topology 1)" from a
+-- table of counts by reason (femlod_improve_reason names), "" when empty;
+-- s (optional) holds corner_angle_min/max.
+function M.reasons(by, s)
+  if type(by) ~= "table" then return "" end
+  local forced, nf, other = {}, 0, {}
+  for _, k in ipairs(REASONS) do
+    local n = by[k] or 0
+    if n > 0 then
+      if FORCED[k] then
+        nf = nf + n
+        forced[#forced + 1] = format("%s %d", k, n)
+      else
+        other[#other + 1] = format("%s %d", k, n)
+      end
+    end
+  end
+  if nf == 0 and #other == 0 then return "" end
+  local parts = {}
+  if nf > 0 then
+    local ang = ""
+    if s and s.corner_angle_max then
+      local lo, hi = format("%.1f", s.corner_angle_min), format("%.1f", s.corner_angle_max)
+      ang = lo == hi and format(" at %s degrees", hi) or format(" at %s-%s degrees", lo, hi)
+    end
+    parts[1] = format("forced %d: %s%s", nf, concat(forced, ", "), ang)
+  end
+  if #other > 0 then parts[#parts + 1] = "not forced: " .. concat(other, ", ") end
+  return " (" .. concat(parts, "; ") .. ")"
+end
+
+-- Why and after how much work it stopped; what the improve stage did (when
+-- it ran); at a stop with no valid edge, the checks refusing the edges left
+-- (each once); which checks refused collapses (counts of edge evaluations);
+-- the output triangles left breaking a threshold, by reason (and vertices
+-- above max_valence, when any); the thresholds in force ("off" when
+-- switched off, target "none" when there was none).
 function M.stats(s)
   s = stats_of(s, "stats")
   local rej, th = {}, {}
@@ -212,9 +250,43 @@ function M.stats(s)
       plural(s.improve_operations, "operation"), plural(s.improve_triangles, "triangle"),
       s.improve_seconds)
   end
+  -- the last full evaluation at a stop with no valid edge: each edge once
+  if s.stop_rejected then
+    local by, n = {}, 0
+    for _, k in ipairs(REJECTED) do
+      local c = s.stop_rejected[k] or 0
+      n = n + c
+      if c > 0 then by[#by + 1] = { k, c } end
+    end
+    -- the edges that pass it fail the checks made when taken from the queue
+    if (s.stop_taken or 0) > 0 then
+      n = n + s.stop_taken
+      by[#by + 1] = { "intersection or deviation", s.stop_taken }
+    end
+    sort(by, function(a, b) return a[2] > b[2] or (a[2] == b[2] and a[1] < b[1]) end)
+    local st = s.stop_topology
+    for i, e in ipairs(by) do
+      by[i] = format("%s %d", e[1], e[2])
+      if e[1] == "topology" and st then
+        local parts = {}
+        for _, k in ipairs({ "features", "link", "boundary", "nonmanifold" }) do
+          if (st[k] or 0) > 0 then parts[#parts + 1] = format("%s %d", k, st[k]) end
+        end
+        if #parts > 0 then by[i] = by[i] .. " (" .. concat(parts, ", ") .. ")" end
+      end
+    end
+    if n > 0 then
+      lines[#lines + 1] = format("stopped at %d: each of the %s left breaks a check: %s", s.triangles,
+        plural(n, "edge"), concat(by, ", "))
+    end
+  end
   lines[#lines + 1] = "rejected: " .. concat(rej, ", ")
-  lines[#lines + 1] = format("violating output: %s; dropped degenerate: %d",
-    plural(s.violating_input, "triangle"), s.dropped_degenerate)
+  lines[#lines + 1] = format("violating output: %s%s; dropped degenerate: %d",
+    plural(s.violating_input, "triangle"), M.reasons(s.violating_by, s), s.dropped_degenerate)
+  if (s.violating_valence or 0) > 0 then
+    lines[#lines + 1] = format("valence above max: %s%s", plural(s.violating_valence, "vertex", "vertices"),
+      M.reasons(s.violating_valence_by))
+  end
   lines[#lines + 1] = "thresholds: " .. concat(th, ", ")
   return concat(lines, "\n")
 end
@@ -905,6 +977,12 @@ function M.report(mesh, opts)
       if st < threshold then below = below + 1 end
     end
   end
+  -- the honest count: what breaks min_stretch or valence 12, by reason
+  -- (mesh:census with the default thresholds and feature angle)
+  local census
+  if threshold and (below > 0 or q.valence_max > 12) then
+    census = mesh:census { min_stretch = threshold }
+  end
   local rows = {}
   local rq
   if ref then
@@ -916,7 +994,12 @@ function M.report(mesh, opts)
     name = name, quality = q, reference_quality = rq,
     row = M.row(q, name, ref and "result" or nil),
     reference_row = rq and M.row(rq, ref_name, "reference") or nil,
-    text = M.text(q, name, opts.max_deviation),
+    text = M.text(q, name, opts.max_deviation, census and format(
+      "%s below min_stretch %s%s; %s above max_valence %d%s",
+      plural(census.remaining.stretch, "triangle"), num(threshold), M.reasons(census.remaining_by.stretch, census),
+      plural(census.remaining.valence, "vertex", "vertices"), census.max_valence or 12,
+      M.reasons(census.remaining_by.valence))),
+    census = census,
     deviation_exceeded = q.hausdorff ~= nil and opts.max_deviation ~= nil and q.hausdorff > opts.max_deviation,
     histograms = { stretch = q.histogram, size = zcounts, size_edges = zedges, size_max = q.size_max,
       valence = vlist },

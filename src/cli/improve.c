@@ -91,11 +91,12 @@ static void print_reasons(lua_State *L, int rep, const char *what) {
     lua_pushnil(L);
     /* the names in the core's order, so the output does not depend on hash order */
     lua_pop(L, 1);
-    static const char *const names[] = {"corner", "fixed", "deviation", "stretch", "valence", "foldover",
-                                        "topology", "intersection", "untried", "depth", NULL};
-    for (int i = 0; names[i]; i++) {
-        lua_getfield(L, -1, names[i]);
-        if (!lua_isnil(L, -1)) printf("      %8lld  %s\n", (long long)lua_tointeger(L, -1), names[i]);
+    for (int i = 0; i < FEMLOD_IMPROVE_REASON_COUNT; i++) {
+        const char *name = femlod_improve_reason_name((femlod_improve_reason)i);
+        lua_getfield(L, -1, name);
+        if (!lua_isnil(L, -1))
+            printf("      %8lld  %s%s\n", (long long)lua_tointeger(L, -1), name,
+                   femlod_improve_reason_forced((femlod_improve_reason)i) ? " (forced)" : "");
         lua_pop(L, 1);
     }
     lua_pop(L, 2);

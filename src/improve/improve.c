@@ -19,11 +19,83 @@
 #define DEFAULT_ROUNDS 20
 
 static const char *const reason_names[FEMLOD_IMPROVE_REASON_COUNT] = {
-    "corner", "fixed", "deviation", "stretch", "valence", "foldover", "topology", "intersection", "untried", "depth"};
+    "corner", "fixed",   "deviation", "stretch",  "valence",  "foldover",
+    "topology", "intersection", "untried", "depth", "boundary", "fixable"};
 
 const char *femlod_improve_reason_name(femlod_improve_reason reason) {
     if ((int)reason < 0 || reason >= FEMLOD_IMPROVE_REASON_COUNT) return "unknown";
     return reason_names[reason];
+}
+
+int femlod_improve_reason_forced(femlod_improve_reason reason) {
+    return reason == FEMLOD_IMPROVE_CORNER || reason == FEMLOD_IMPROVE_BOUNDARY;
+}
+
+#define PI 3.14159265358979323846
+
+/* Every triangle with an angle a at a vertex is similar to one with legs 1
+ * and t in (0, 1] there (docs/design.md "What remains, and why"); the
+ * stretch is smooth in t, so a grid of 1,000 steps is within 1e-5 of the
+ * largest. */
+double femlod_stretch_bound(double angle_degrees) {
+    if (!(angle_degrees > 0.0) || !(angle_degrees < 180.0)) return 0.0;
+    double a = angle_degrees * PI / 180.0, best = 0.0;
+    const double o[3] = {0, 0, 0}, x[3] = {1, 0, 0};
+    for (int i = 1; i <= 1000; i++) {
+        double t = i / 1000.0, w[3] = {t * cos(a), t * sin(a), 0.0};
+        best = fmax(best, im_stretch(o, x, w));
+    }
+    return best;
+}
+
+/* The angle at corner p between q and r, degrees. */
+static double angle_at(const double *p, const double *q, const double *r) {
+    double u[3], w[3];
+    sub3(u, q, p);
+    sub3(w, r, p);
+    double lu = sqrt(dot3(u, u)), lw = sqrt(dot3(w, w));
+    if (!(lu > 0) || !(lw > 0)) return 0.0;
+    return acos(fmax(-1.0, fmin(1.0, dot3(u, w) / (lu * lw)))) * 180.0 / PI;
+}
+
+/* A triangle below min_stretch that the geometry forces: its two edges at a
+ * vertex are feature edges meeting at an angle a < 60 degrees whose bound
+ * femlod_stretch_bound(a) is below min_stretch. Every triangle between those
+ * lines at that vertex has an angle at most a there, and the bound rises on
+ * (0, 60], so none can reach min_stretch. FEMLOD_IMPROVE_BOUNDARY when both
+ * edges are boundary edges, FEMLOD_IMPROVE_CORNER otherwise, -1 when not
+ * forced; *angle gets the sharpest such angle. */
+static int forced_face(const imesh *M, const uint32_t t[3], double minst, double *angle) {
+    int r = -1;
+    for (int k = 0; k < 3; k++) {
+        uint32_t v = t[k], u = t[(k + 1) % 3], w = t[(k + 2) % 3];
+        if (!fl_imesh_is_feature(M, v, u) || !fl_imesh_is_feature(M, v, w)) continue;
+        double a = angle_at(im_P(M, v), im_P(M, u), im_P(M, w));
+        if (!(a < 60.0) || !(femlod_stretch_bound(a) < minst)) continue;
+        if (r >= 0 && a >= *angle) continue;
+        *angle = a;
+        r = fl_imesh_edge_faces(M, v, u, NULL, 0) == 1 && fl_imesh_edge_faces(M, v, w, NULL, 0) == 1
+                ? FEMLOD_IMPROVE_BOUNDARY
+                : FEMLOD_IMPROVE_CORNER;
+    }
+    return r;
+}
+
+/* A vertex above max_valence that the geometry forces: more feature edges
+ * meet there than max_valence (no flip removes a feature edge, no collapse
+ * takes a corner). FEMLOD_IMPROVE_CORNER or -1. */
+static int forced_vertex(imesh *M, uint32_t v, int maxval) {
+    uint32_t s = fl_imesh_next_stamp(M), n = 0;
+    const im_list *l = M->vf + v;
+    for (uint32_t i = 0; i < l->n; i++) {
+        const uint32_t *t = M->tri + 3 * (size_t)l->f[i];
+        for (int c = 0; c < 3; c++)
+            if (t[c] != v && M->vmark[t[c]] != s) {
+                M->vmark[t[c]] = s;
+                if (fl_imesh_is_feature(M, v, t[c])) n++;
+            }
+    }
+    return n > (uint32_t)maxval ? FEMLOD_IMPROVE_CORNER : -1;
 }
 
 static double wall(void) {
@@ -137,15 +209,31 @@ static int fix_face(run *R, uint32_t f) {
     sub3(ab, pb, pa);
     sub3(ac, pc, pa);
     double s = dot3(ab, ac) / dot3(ab, ab);
-    if (s > 0.1 && s < 0.9 && M->vclass[c] == IM_FREE) {
+    int reach = 1;
+    if (s > 0.1 && s < 0.9 && M->vclass[c] != IM_FREE) {
+        /* an apex that cannot move (a band between feature lines): only
+         * halvings along ab make the band's triangles round, about
+         * log2(|ab| / height) of them; past the depth bound they would
+         * only make more needles */
+        double h2 = 0.0;
+        for (int k = 0; k < 3; k++) h2 += (pc[k] - pa[k] - s * ab[k]) * (pc[k] - pa[k] - s * ab[k]);
+        unsigned d = M->vdepth[a] > M->vdepth[b] ? M->vdepth[a] : M->vdepth[b];
+        double need = 0.5 * log2(dot3(ab, ab) / fmax(h2, 1e-300));
+        if (!((double)d + need <= (double)IM_MAX_DEPTH / 2)) {
+            reach = 0;
+            why = FEMLOD_IMPROVE_DEPTH;
+        }
+    }
+    if (s > 0.1 && s < 0.9 && reach) {
         double foot[3];
         for (int k = 0; k < 3; k++) foot[k] = pa[k] + s * ab[k];
         if (fl_imop_split(C, a, b, foot, &w)) {
             R->budget--;
             uint32_t m = (uint32_t)M->nv - 1;
-            /* the apex onto the foot; without it, the halves are left to the
-             * next operators */
-            fl_imop_collapse(C, c, m, &w);
+            /* the apex onto the foot; without it (an apex on a feature line
+             * or fixed: a band between two lines), the halves are left to
+             * the next operators, which halve them along the lines */
+            if (M->vclass[c] == IM_FREE) fl_imop_collapse(C, c, m, &w);
             return 1;
         }
         why = w;
@@ -255,51 +343,69 @@ static femlod_status make_output(femlod_mesh **out, imesh *M, uint32_t *vmap, fe
     return FEMLOD_OK;
 }
 
-/* What still breaks a threshold, by reason. */
+static void note_angle(femlod_improve_report *rep, double a) {
+    if (rep->corner_angle_max == 0.0 || a > rep->corner_angle_max) rep->corner_angle_max = a;
+    if (rep->corner_angle_min == 0.0 || a < rep->corner_angle_min) rep->corner_angle_min = a;
+}
+
+/* what breaks a threshold in face f: bit 1 stretch, bit 2 size */
+static int face_breaks(const imesh *M, const im_params *p, uint32_t f) {
+    const uint32_t *t = M->tri + 3 * (size_t)f;
+    int b = 0;
+    if (p->st_on && im_face_stretch(M, f) < p->minst) b |= 1;
+    if (p->sz_on) {
+        const double *a = im_P(M, t[0]), *c = im_P(M, t[1]), *d = im_P(M, t[2]);
+        double L2 = fmax(dist2(a, c), fmax(dist2(c, d), dist2(a, d)));
+        if (L2 > p->maxsz * p->maxsz) b |= 2;
+    }
+    return b;
+}
+
+/* the reason of a face the operators left: its last refusal; untried
+ * faces of fixed vertices only are fixed */
+static int left_reason(const imesh *M, uint32_t f) {
+    const uint32_t *t = M->tri + 3 * (size_t)f;
+    int r = M->freason[f] ? M->freason[f] - 1 : FEMLOD_IMPROVE_UNTRIED;
+    if (r == FEMLOD_IMPROVE_UNTRIED && M->vclass[t[0]] == IM_FIXED && M->vclass[t[1]] == IM_FIXED &&
+        M->vclass[t[2]] == IM_FIXED)
+        r = FEMLOD_IMPROVE_FIXED;
+    return r;
+}
+
+static void count_face(femlod_improve_report *rep, int breaks, int r) {
+    if (breaks & 1) {
+        rep->stretch_out++;
+        rep->stretch_by[r]++;
+    }
+    if (breaks & 2) {
+        rep->size_out++;
+        rep->size_by[r]++;
+    }
+    rep->violating++;
+    rep->violating_by[r]++;
+}
+
+static void count_vertex(femlod_improve_report *rep, int r) {
+    rep->valence_out++;
+    rep->valence_by[r]++;
+}
+
+/* What still breaks a threshold, by reason: forced first, else the last
+ * refusal. */
 static void final_census(run *R, femlod_improve_report *rep) {
     imesh *M = R->C.M;
     const im_params *p = R->C.p;
     rep->stretch_min = M->live ? 1.0 : 0.0;
     for (size_t f = 0; f < M->nt; f++) {
         if (!face_live(M, (uint32_t)f)) continue;
-        const uint32_t *t = M->tri + 3 * f;
-        double s = im_face_stretch(M, (uint32_t)f);
-        rep->stretch_min = fmin(rep->stretch_min, s);
-        int r = M->freason[f] ? M->freason[f] - 1 : FEMLOD_IMPROVE_UNTRIED;
-        if (p->st_on && s < p->minst) {
-            /* the sharpest angle between two feature edges: forced */
-            const double *P0 = im_P(M, t[0]), *P1 = im_P(M, t[1]), *P2 = im_P(M, t[2]);
-            const double *Pc[3] = {P0, P1, P2};
-            int kmin = 0;
-            double best = 2.0;
-            for (int k = 0; k < 3; k++) {
-                double u[3], w[3];
-                sub3(u, Pc[(k + 1) % 3], Pc[k]);
-                sub3(w, Pc[(k + 2) % 3], Pc[k]);
-                double lu = sqrt(dot3(u, u)), lw = sqrt(dot3(w, w));
-                double cs = lu > 0 && lw > 0 ? dot3(u, w) / (lu * lw) : 1.0;
-                double ang = acos(fmax(-1.0, fmin(1.0, cs)));
-                if (ang < best) {
-                    best = ang;
-                    kmin = k;
-                }
-            }
-            uint32_t v = t[kmin], u = t[(kmin + 1) % 3], w = t[(kmin + 2) % 3];
-            if (fl_imesh_is_feature(M, v, u) && fl_imesh_is_feature(M, v, w)) r = FEMLOD_IMPROVE_CORNER;
-            else if (r == FEMLOD_IMPROVE_UNTRIED && M->vclass[t[0]] == IM_FIXED && M->vclass[t[1]] == IM_FIXED &&
-                     M->vclass[t[2]] == IM_FIXED)
-                r = FEMLOD_IMPROVE_FIXED;
-            rep->stretch_out++;
-            rep->stretch_by[r]++;
-        }
-        if (p->sz_on) {
-            const double *a = im_P(M, t[0]), *b = im_P(M, t[1]), *c = im_P(M, t[2]);
-            double L2 = fmax(dist2(a, b), fmax(dist2(b, c), dist2(a, c)));
-            if (L2 > p->maxsz * p->maxsz) {
-                rep->size_out++;
-                rep->size_by[r]++;
-            }
-        }
+        rep->stretch_min = fmin(rep->stretch_min, im_face_stretch(M, (uint32_t)f));
+        int b = face_breaks(M, p, (uint32_t)f);
+        if (!b) continue;
+        double a = 0.0;
+        int r = (b & 1) ? forced_face(M, M->tri + 3 * f, p->minst, &a) : -1;
+        if (r >= 0) note_angle(rep, a);
+        else r = left_reason(M, (uint32_t)f);
+        count_face(rep, b, r);
     }
     rep->valence_max = 0;
     for (uint32_t v = 0; v < M->nv; v++) {
@@ -307,21 +413,111 @@ static void final_census(run *R, femlod_improve_report *rep) {
         uint32_t val = fl_imesh_valence(M, v);
         if (val > rep->valence_max) rep->valence_max = val;
         if (p->val_on && val > (uint32_t)p->maxval) {
-            int r = v < R->capvr && R->vreason[v] ? R->vreason[v] - 1 : FEMLOD_IMPROVE_UNTRIED;
-            if (M->vclass[v] == IM_FIXED) r = FEMLOD_IMPROVE_FIXED;
-            rep->valence_out++;
-            rep->valence_by[r]++;
+            int r = forced_vertex(M, v, p->maxval);
+            if (r < 0) r = v < R->capvr && R->vreason[v] ? R->vreason[v] - 1 : FEMLOD_IMPROVE_UNTRIED;
+            if (r == FEMLOD_IMPROVE_UNTRIED && M->vclass[v] == IM_FIXED) r = FEMLOD_IMPROVE_FIXED;
+            count_vertex(rep, r);
         }
     }
 }
 
+/* The census's elements: what breaks a threshold in the mesh as given, with
+ * the forced class (-1: none) taken before any operator runs. */
+typedef struct census_item {
+    uint32_t id;
+    int breaks, forced;
+    double angle;
+} census_item;
+
+typedef struct census_list {
+    census_item *face, *vert;
+    size_t nf, nv;
+} census_list;
+
+static int census_take(run *R, census_list *L) {
+    imesh *M = R->C.M;
+    const im_params *p = R->C.p;
+    size_t nf = 0, nv = 0;
+    for (uint32_t f = 0; f < M->nt; f++)
+        if (face_live(M, f) && face_breaks(M, p, f)) nf++;
+    for (uint32_t v = 0; v < M->nv; v++)
+        if (p->val_on && M->vf[v].n && fl_imesh_valence(M, v) > (uint32_t)p->maxval) nv++;
+    L->face = fl_alloc(nf ? nf : 1, sizeof *L->face);
+    L->vert = fl_alloc(nv ? nv : 1, sizeof *L->vert);
+    if (!L->face || !L->vert) return 0;
+    L->nf = L->nv = 0;
+    for (uint32_t f = 0; f < M->nt; f++) {
+        int b = face_live(M, f) ? face_breaks(M, p, f) : 0;
+        if (!b) continue;
+        census_item *c = L->face + L->nf++;
+        c->id = f;
+        c->breaks = b;
+        c->angle = 0.0;
+        c->forced = (b & 1) ? forced_face(M, M->tri + 3 * (size_t)f, p->minst, &c->angle) : -1;
+    }
+    for (uint32_t v = 0; v < M->nv; v++) {
+        if (!p->val_on || !M->vf[v].n || fl_imesh_valence(M, v) <= (uint32_t)p->maxval) continue;
+        census_item *c = L->vert + L->nv++;
+        c->id = v;
+        c->breaks = 0;
+        c->angle = 0.0;
+        c->forced = forced_vertex(M, v, p->maxval);
+    }
+    return 1;
+}
+
+/* After one round of the operators: each element taken is forced, or
+ * fixable (gone, or no longer breaking its threshold), or its refusal. */
+static void census_count(run *R, const census_list *L, femlod_improve_report *rep) {
+    imesh *M = R->C.M;
+    const im_params *p = R->C.p;
+    for (size_t i = 0; i < L->nf; i++) {
+        const census_item *c = L->face + i;
+        int r = c->forced;
+        if (r >= 0) note_angle(rep, c->angle);
+        else if (!face_live(M, c->id) || !(face_breaks(M, p, c->id) & c->breaks)) r = FEMLOD_IMPROVE_FIXABLE;
+        else r = left_reason(M, c->id);
+        count_face(rep, c->breaks, r);
+    }
+    for (size_t i = 0; i < L->nv; i++) {
+        const census_item *c = L->vert + i;
+        int r = c->forced;
+        if (r < 0 && fl_imesh_valence(M, c->id) <= (uint32_t)p->maxval) r = FEMLOD_IMPROVE_FIXABLE;
+        if (r < 0) r = c->id < R->capvr && R->vreason[c->id] ? R->vreason[c->id] - 1 : FEMLOD_IMPROVE_UNTRIED;
+        if (r == FEMLOD_IMPROVE_UNTRIED && M->vclass[c->id] == IM_FIXED) r = FEMLOD_IMPROVE_FIXED;
+        count_vertex(rep, r);
+    }
+}
+
+static femlod_status improve_run(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
+                                 femlod_improve_report *report, uint32_t *vmap, int census_only, int no_split,
+                                 femlod_error *err);
+
 femlod_status femlod_improve(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
                              femlod_improve_report *report, femlod_error *err) {
-    return fl_improve_mapped(out, mesh, options, report, NULL, err);
+    return improve_run(out, mesh, options, report, NULL, 0, 0, err);
 }
 
 femlod_status fl_improve_mapped(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
                                 femlod_improve_report *report, uint32_t *vmap, femlod_error *err) {
+    return improve_run(out, mesh, options, report, vmap, 0, 0, err);
+}
+
+femlod_status fl_improve_no_split(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
+                                  femlod_improve_report *report, femlod_error *err) {
+    return improve_run(out, mesh, options, report, NULL, 0, 1, err);
+}
+
+femlod_status femlod_improve_census(const femlod_mesh *mesh, const femlod_improve_options *options,
+                                    femlod_improve_report *report, femlod_error *err) {
+    return improve_run(NULL, mesh, options, report, NULL, 1, 0, err);
+}
+
+/* census_only: one round on a working copy, no output (femlod_improve_census);
+ * no_split: no split is made (fl_improve_no_split) */
+static femlod_status improve_run(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
+                                 femlod_improve_report *report, uint32_t *vmap, int census_only, int no_split,
+                                 femlod_error *err) {
     double t0 = wall();
     femlod_improve_options o = FEMLOD_IMPROVE_OPTIONS_INIT;
     if (options) o = *options;
@@ -352,7 +548,7 @@ femlod_status fl_improve_mapped(femlod_mesh **out, const femlod_mesh *mesh, cons
     p.st_on = p.minst > 0;
     p.sz_on = p.maxsz > 0;
     p.val_on = p.maxval > 0;
-    int rounds = o.max_rounds ? o.max_rounds : DEFAULT_ROUNDS;
+    int rounds = census_only ? 1 : o.max_rounds ? o.max_rounds : DEFAULT_ROUNDS;
     rep.min_stretch = p.minst;
     rep.max_size = p.maxsz;
     rep.max_valence = p.val_on ? p.maxval : -1;
@@ -404,10 +600,12 @@ femlod_status fl_improve_mapped(femlod_mesh **out, const femlod_mesh *mesh, cons
     R.C.M = &M;
     R.C.S = &S;
     R.C.p = &p;
-    R.budget = 4 * mesh->nt + 1024;
+    R.budget = no_split ? 0 : 4 * mesh->nt + 1024;
     fl_progress prog;
     fl_progress_init(&prog, o.progress, o.progress_payload, (size_t)rounds);
     int nothing = c.st == 0 && c.sz == 0 && c.val == 0;
+    census_list CL = {NULL, NULL, 0, 0};
+    if (ok && census_only && !nothing && !census_take(&R, &CL)) ok = 0;
     for (int round = 0; ok && !nothing && round < rounds; round++) {
         size_t ops0 = R.C.flips + R.C.splits + R.C.collapses + R.C.relaxations;
         /* long edges */
@@ -455,7 +653,13 @@ femlod_status fl_improve_mapped(femlod_mesh **out, const femlod_mesh *mesh, cons
         if (R.C.flips + R.C.splits + R.C.collapses + R.C.relaxations == ops0) break;
     }
     if (ok && R.C.oom) ok = 0;
-    if (ok) {
+    if (ok && census_only) {
+        fl_progress_end(&prog);
+        rep.stretch_min = c.stmin;
+        rep.valence_max = c.valmax;
+        census_count(&R, &CL, &rep);
+        st = FEMLOD_OK;
+    } else if (ok) {
         fl_progress_end(&prog);
         final_census(&R, &rep);
         st = make_output(out, &M, vmap, err);
@@ -466,10 +670,16 @@ femlod_status fl_improve_mapped(femlod_mesh **out, const femlod_mesh *mesh, cons
     rep.collapses = R.C.collapses;
     rep.relaxations = R.C.relaxations;
     for (int k = 0; k < FEMLOD_IMPROVE_REASON_COUNT; k++) rep.refused[k] = R.C.refused[k];
-    if (st == FEMLOD_OK) {
+    if (st == FEMLOD_OK && !census_only) {
         rep.triangles = (*out)->nt;
         rep.vertices = (*out)->nv;
+    } else if (st == FEMLOD_OK) {
+        rep.triangles = mesh->nt;
+        rep.vertices = mesh->nv;
+        /* no change is made: the operators' counts are the try's */
     }
+    free(CL.face);
+    free(CL.vert);
     free(R.C.buf);
     free(R.vreason);
     fl_imesh_free(&M);

@@ -1242,6 +1242,38 @@ static int hierarchy_stats(lua_State *L) {
         set_integer(L, femlod_reject_name((femlod_reject)k), r->rejected[k]);
     lua_setfield(L, -2, "rejected");
     set_integer(L, "violating_input", r->violating_input);
+    /* the honest count: by reason, only the reasons with elements */
+    lua_createtable(L, 0, 4);
+    for (int k = 0; k < FEMLOD_IMPROVE_REASON_COUNT; k++)
+        if (r->violating_by[k]) set_integer(L, femlod_improve_reason_name((femlod_improve_reason)k), r->violating_by[k]);
+    lua_setfield(L, -2, "violating_by");
+    set_integer(L, "violating_valence", r->violating_valence);
+    lua_createtable(L, 0, 4);
+    for (int k = 0; k < FEMLOD_IMPROVE_REASON_COUNT; k++)
+        if (r->violating_valence_by[k])
+            set_integer(L, femlod_improve_reason_name((femlod_improve_reason)k), r->violating_valence_by[k]);
+    lua_setfield(L, -2, "violating_valence_by");
+    if (r->corner_angle_max > 0.0) {
+        lua_pushnumber(L, r->corner_angle_min);
+        lua_setfield(L, -2, "corner_angle_min");
+        lua_pushnumber(L, r->corner_angle_max);
+        lua_setfield(L, -2, "corner_angle_max");
+    }
+    if (r->stop_reason == FEMLOD_STOP_NO_VALID_EDGE) {
+        lua_createtable(L, 0, FEMLOD_REJECT_COUNT);
+        for (int k = 0; k < FEMLOD_REJECT_COUNT; k++)
+            set_integer(L, femlod_reject_name((femlod_reject)k), r->stop_rejected[k]);
+        lua_setfield(L, -2, "stop_rejected");
+        size_t t = r->stop_rejected[FEMLOD_REJECT_TOPOLOGY], a = r->stop_topology[0], b = r->stop_topology[1],
+               c = r->stop_topology[2];
+        lua_createtable(L, 0, 4);
+        set_integer(L, "nonmanifold", a);
+        set_integer(L, "features", b);
+        set_integer(L, "boundary", c);
+        set_integer(L, "link", t >= a + b + c ? t - a - b - c : 0);
+        lua_setfield(L, -2, "stop_topology");
+        set_integer(L, "stop_taken", r->stop_taken);
+    }
     set_integer(L, "dropped_degenerate", r->dropped_degenerate);
     lua_pushboolean(L, r->improved);
     lua_setfield(L, -2, "improved");

@@ -1,6 +1,7 @@
 /*
  * limprove.c - mesh:improve{...} (femlod_improve, docs/design.md "Improving a
- * mesh in place"): a new Mesh and a report table.
+ * mesh in place"): a new Mesh and a report table; mesh:census{...}
+ * (femlod_improve_census): the report alone, for the mesh as it is.
  *
  *   local better, rep = m:improve{ min_stretch = 0.2, max_valence = 12,
  *                                  max_size = 5, max_deviation = 0.01,
@@ -11,7 +12,9 @@
  * number the value. rep: triangles_in, triangles, vertices_in, vertices,
  * rounds, operations = { flip, split, collapse, relax }, input = { stretch,
  * size, valence } (elements breaking each threshold), remaining = { stretch,
- * size, valence }, remaining_by = { stretch = { REASON = n }, ... },
+ * size, valence }, remaining_by = { stretch = { REASON = n }, size, valence,
+ * triangles (stretch or size, each once) }, violating (their count),
+ * corner_angle_min/max (degrees, when a forced corner remains),
  * refused = { REASON = n }, stretch_min_in, stretch_min, valence_max_in,
  * valence_max, the thresholds in force and seconds.
  */
@@ -66,8 +69,9 @@ static void set_threshold(lua_State *L, const char *key, double v) {
     lua_setfield(L, -2, key);
 }
 
-static int mesh_improve(lua_State *L) {
-    const femlod_mesh *m = fl_lmesh_check(L, 1);
+/* The options table at index 2 into *io (a lock list kept in a userdata
+ * pushed on the stack). */
+static void read_options(lua_State *L, const femlod_mesh *m, femlod_improve_options *out) {
     fl_opts o;
     fl_opts_open(&o, L, 2, improve_keys);
     femlod_improve_options io = FEMLOD_IMPROVE_OPTIONS_INIT;
@@ -113,11 +117,12 @@ static int mesh_improve(lua_State *L) {
         io.lock = buf;
         io.lock_count = (size_t)len;
     }
-    femlod_mesh **slot = fl_lmesh_box(L);
-    femlod_improve_report r;
-    femlod_error err;
-    if (femlod_improve(slot, m, &io, &r, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
-    fl_lmesh_charge(L, slot);
+    *out = io;
+}
+
+/* The report as a table on the stack. */
+static void push_report(lua_State *L, const femlod_improve_report *rp) {
+    femlod_improve_report r = *rp;
     lua_createtable(L, 0, 24);
     static const struct {
         const char *key;
@@ -154,7 +159,17 @@ static int mesh_improve(lua_State *L) {
     lua_setfield(L, -2, "size");
     push_reasons(L, r.valence_by);
     lua_setfield(L, -2, "valence");
+    push_reasons(L, r.violating_by);
+    lua_setfield(L, -2, "triangles");
     lua_setfield(L, -2, "remaining_by");
+    lua_pushinteger(L, (lua_Integer)r.violating);
+    lua_setfield(L, -2, "violating");
+    if (r.corner_angle_max > 0.0) {
+        lua_pushnumber(L, r.corner_angle_min);
+        lua_setfield(L, -2, "corner_angle_min");
+        lua_pushnumber(L, r.corner_angle_max);
+        lua_setfield(L, -2, "corner_angle_max");
+    }
     push_reasons(L, r.refused);
     lua_setfield(L, -2, "refused");
     lua_pushnumber(L, r.stretch_min_in);
@@ -175,7 +190,32 @@ static int mesh_improve(lua_State *L) {
     lua_setfield(L, -2, "max_valence");
     lua_pushnumber(L, r.seconds);
     lua_setfield(L, -2, "seconds");
+}
+
+static int mesh_improve(lua_State *L) {
+    const femlod_mesh *m = fl_lmesh_check(L, 1);
+    femlod_improve_options io;
+    read_options(L, m, &io);
+    femlod_mesh **slot = fl_lmesh_box(L);
+    femlod_improve_report r;
+    femlod_error err;
+    if (femlod_improve(slot, m, &io, &r, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    fl_lmesh_charge(L, slot);
+    push_report(L, &r);
     return 2;
+}
+
+/* mesh:census{...}: femlod_improve_census, the report of mesh:improve for
+ * the mesh as it is (no mesh returned) */
+static int mesh_census(lua_State *L) {
+    const femlod_mesh *m = fl_lmesh_check(L, 1);
+    femlod_improve_options io;
+    read_options(L, m, &io);
+    femlod_improve_report r;
+    femlod_error err;
+    if (femlod_improve_census(m, &io, &r, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    push_report(L, &r);
+    return 1;
 }
 
 void fl_limprove_open(lua_State *L) {
@@ -183,5 +223,7 @@ void fl_limprove_open(lua_State *L) {
     lua_getfield(L, -1, "__index");
     lua_pushcfunction(L, mesh_improve);
     lua_setfield(L, -2, "improve");
+    lua_pushcfunction(L, mesh_census);
+    lua_setfield(L, -2, "census");
     lua_pop(L, 2);
 }

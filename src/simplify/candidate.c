@@ -80,6 +80,27 @@ static int ring_reserve(ring *R, size_t n) {
 
 /* {====== gather: the position-independent part of an edge's evaluation */
 
+/* Which of gather's first topology checks refuses edge e (they come first
+ * in every evaluation, in this order): FL_TOPO_NONMANIFOLD (a non-manifold
+ * edge or end), FL_TOPO_FEATURE (two fixed ends, or a feature vertex that
+ * would leave its line or merge with another line across a non-feature
+ * edge), FL_TOPO_BOUNDARY (an interior edge between two boundary vertices:
+ * it would pinch the surface), or -1 (none: a later check decides). */
+int fl_simp_topology_kind(const simp *S, uint32_t e) {
+    uint32_t i = S->edge[e].v[0], j = S->edge[e].v[1];
+    uint8_t fi = S->vflag[i], fj = S->vflag[j];
+    unsigned nf = S->edge[e].nf;
+    int feature = (S->edge[e].flag & E_FEATURE) != 0;
+    if (nf == 0 || nf > 2 || ((fi | fj) & V_NONMANIFOLD)) return FL_TOPO_NONMANIFOLD;
+    int fixi = (fi & V_FIXED) != 0, fixj = (fj & V_FIXED) != 0;
+    int feati = S->fdeg[i] > 0, featj = S->fdeg[j] > 0;
+    if (fixi && fixj) return FL_TOPO_FEATURE;
+    if ((fixi && featj && !feature) || (fixj && feati && !feature) || (!fixi && !fixj && feati && featj && !feature))
+        return FL_TOPO_FEATURE;
+    if (nf != 1 && (fi & V_BOUNDARY) && (fj & V_BOUNDARY)) return FL_TOPO_BOUNDARY;
+    return -1;
+}
+
 /* Returns NO_REASON when the edge may be collapsed (position aside) and
  * fills R; otherwise the reason. */
 static int gather(simp *S, ring *R, uint32_t e) {

@@ -445,6 +445,9 @@ FL_INTERNAL int fl_simp_progress(simp *S, const femlod_simplify_options *o, size
 /* The best priority of edge e (< 0: no valid candidate), its candidates
  * left in R, the best valid one first. */
 FL_INTERNAL double fl_simp_evaluate(simp *S, ring *R, uint32_t e);
+/* gather's first topology checks, apart (candidate.c) */
+enum { FL_TOPO_NONMANIFOLD = 0, FL_TOPO_FEATURE = 1, FL_TOPO_BOUNDARY = 2 };
+FL_INTERNAL int fl_simp_topology_kind(const simp *S, uint32_t e);
 /* An upper bound of fl_simp_evaluate's priority for an edge away from the
  * last collapse's vertex k (the lazy queue, FEMLOD_SIMPLIFY_BOUND). */
 FL_INTERNAL double fl_simp_bound_edge(simp *S, ring *R, uint32_t e, uint32_t k);

@@ -420,6 +420,30 @@ static void release_freed_memory(size_t triangles) {
 #endif
 }
 
+/* At a stop with no valid edge: one more evaluation of every live edge
+ * (the heap is empty), its refusals by first failing check into rej, each
+ * edge once; *taken gets the edges that pass that evaluation, which the
+ * checks made when an edge is taken from the queue (intersection,
+ * deviation) then refused; topo gets the edges refused by gather's first
+ * topology checks, by kind. The run's own counts (S->rejected) are left as
+ * they were, and the edges queued again are taken out. 0 on ENOMEM. */
+static int stop_count(simp *S, const femlod_simplify_options *o, size_t rej[FEMLOD_REJECT_COUNT], size_t *taken,
+                      size_t topo[3]) {
+    size_t before[FEMLOD_REJECT_COUNT];
+    memcpy(before, S->rejected, sizeof before);
+    *taken = fl_simp_evaluate_all(S, o, 1.0);
+    if (S->oom) return 0;
+    for (int k = 0; k < FEMLOD_REJECT_COUNT; k++) rej[k] = S->rejected[k] - before[k];
+    memcpy(S->rejected, before, sizeof before);
+    for (size_t e = 0; e < S->ne; e++) {
+        if (fl_heap_contains(&S->heap, (uint32_t)e)) fl_heap_remove(&S->heap, (uint32_t)e);
+        if (S->edge[e].flag & E_DEAD) continue;
+        int k = fl_simp_topology_kind(S, (uint32_t)e);
+        if (k >= 0) topo[k]++;
+    }
+    return 1;
+}
+
 static femlod_status simplify_core(femlod_mesh **out, femlod_collapse_log **out_log, const femlod_mesh *mesh,
                                    const femlod_simplify_options *options, femlod_simplify_result *result,
                                    femlod_error *err) {
@@ -458,6 +482,10 @@ static femlod_status simplify_core(femlod_mesh **out, femlod_collapse_log **out_
     (void)t5;
     size_t out_collapses = S->collapses, out_rejected[FEMLOD_REJECT_COUNT];
     memcpy(out_rejected, S->rejected, sizeof out_rejected);
+    size_t stop_rejected[FEMLOD_REJECT_COUNT] = {0}, stop_topology[3] = {0}, stop_taken = 0;
+    if (r == 1 && why == FEMLOD_STOP_NO_VALID_EDGE && result &&
+        !stop_count(S, o, stop_rejected, &stop_taken, stop_topology))
+        r = 0;
     if (r == 0 || make_output(S, &m, S->log) != FEMLOD_OK) {
         femlod_collapse_log_free(S->log);
         simp_free(S);
@@ -516,6 +544,9 @@ static femlod_status simplify_core(femlod_mesh **out, femlod_collapse_log **out_
         result->prephase_collapses = S->prephase;
         result->fast_collapses = S->swept;
         memcpy(result->rejected, out_rejected, sizeof result->rejected);
+        memcpy(result->stop_rejected, stop_rejected, sizeof stop_rejected);
+        memcpy(result->stop_topology, stop_topology, sizeof stop_topology);
+        result->stop_taken = stop_taken;
         result->hierarchy_triangles = S->live;
         result->hierarchy_stop = hwhy;
         result->hierarchy_binding = S->log ? S->log->binding : FEMLOD_REJECT_COUNT;
@@ -599,6 +630,70 @@ static femlod_improve_options improve_options(const femlod_simplify_options *o, 
     return io;
 }
 
+static int cmp_point(const void *a, const void *b) {
+    const double *x = a, *y = b;
+    for (int k = 0; k < 3; k++)
+        if (x[k] != y[k]) return x[k] < y[k] ? -1 : 1;
+    return 0;
+}
+
+typedef struct lock_points {
+    double *p; /* sorted positions of the locked input vertices */
+    size_t n;
+    femlod_lock_fn fn; /* and the options' lock function (NULL: none) */
+    void *payload;
+} lock_points;
+
+static int locked_at(void *payload, double x, double y, double z) {
+    const lock_points *L = payload;
+    if (L->fn && L->fn(L->payload, x, y, z)) return 1;
+    double q[3] = {x, y, z};
+    return L->n && bsearch(q, L->p, L->n, 3 * sizeof *L->p, cmp_point) != NULL;
+}
+
+/* The honest count (docs/design.md "What remains, and why"): the output's
+ * elements that break a threshold, by reason, from femlod_improve_census
+ * with the simplification's thresholds; locked input vertices are the
+ * output's at their positions (they never move). Runs only when the output
+ * breaks a threshold. */
+static femlod_status census_into(femlod_simplify_result *r, const femlod_mesh *m, const femlod_mesh *input,
+                                 const femlod_simplify_options *o, femlod_error *err) {
+    memset(r->violating_by, 0, sizeof r->violating_by);
+    memset(r->violating_valence_by, 0, sizeof r->violating_valence_by);
+    r->violating_valence = 0;
+    r->corner_angle_min = r->corner_angle_max = 0.0;
+    femlod_status st = FEMLOD_OK;
+    int bad = breaks_threshold(m, o, &st, err);
+    if (st != FEMLOD_OK || !bad) return st;
+    femlod_improve_options io = improve_options(o, 1);
+    io.lock = NULL;
+    io.lock_count = 0;
+    io.progress = NULL;
+    lock_points L = {NULL, 0, o->lock_fn, o->lock_payload};
+    if (o->lock_count) {
+        L.p = fl_alloc(3 * o->lock_count, sizeof *L.p);
+        if (!L.p) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+        for (size_t i = 0; i < o->lock_count; i++)
+            if (o->lock[i] < input->nv) memcpy(L.p + 3 * L.n++, input->pos + 3 * (size_t)o->lock[i], 3 * sizeof *L.p);
+        qsort(L.p, L.n, 3 * sizeof *L.p, cmp_point);
+    }
+    if (L.n || L.fn) {
+        io.lock_fn = locked_at;
+        io.lock_payload = &L;
+    }
+    femlod_improve_report rep;
+    st = femlod_improve_census(m, &io, &rep, err);
+    free(L.p);
+    if (st != FEMLOD_OK) return st;
+    r->violating_input = rep.violating;
+    memcpy(r->violating_by, rep.violating_by, sizeof r->violating_by);
+    r->violating_valence = rep.valence_out;
+    memcpy(r->violating_valence_by, rep.valence_by, sizeof r->violating_valence_by);
+    r->corner_angle_min = rep.corner_angle_min;
+    r->corner_angle_max = rep.corner_angle_max;
+    return FEMLOD_OK;
+}
+
 static size_t report_ops(const femlod_improve_report *r) {
     return r->flips + r->splits + r->collapses + r->relaxations;
 }
@@ -618,8 +713,19 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
     int run = !o->no_improve && !o->keep_boundary && breaks_threshold(mesh, o, &st, err);
     if (st != FEMLOD_OK) return st;
     int polish_on = !o->no_improve && !o->keep_boundary && !out_log && o->max_deviation <= 0.0 && !o->lock_count;
-    if (!run && !polish_on)
-        return simplify_core(out, out_log, mesh, options, result, err);
+    if (!run && !polish_on) {
+        st = simplify_core(out, out_log, mesh, options, result, err);
+        if (st == FEMLOD_OK && result) st = census_into(result, *out, mesh, o, err);
+        if (st != FEMLOD_OK && *out) {
+            femlod_mesh_free(*out);
+            *out = NULL;
+            if (out_log) {
+                femlod_collapse_log_free(*out_log);
+                *out_log = NULL;
+            }
+        }
+        return st;
+    }
     femlod_mesh *better = NULL;
     femlod_improve_report rep;
     memset(&rep, 0, sizeof rep);
@@ -696,7 +802,19 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
                 return st;
             }
             if (pr.stretch_min < pr.stretch_min_in && pr.stretch_min < pr.min_stretch) {
-                femlod_mesh_free(p); /* as before the simplification: never below both */
+                /* as before the simplification: never below both; then the
+                 * polish without splits, whose changes each raise the
+                 * least stretch where they act */
+                femlod_mesh_free(p);
+                p = NULL;
+                st = fl_improve_no_split(&p, m, &io, &pr, err);
+                if (st != FEMLOD_OK) {
+                    femlod_mesh_free(m);
+                    return st;
+                }
+            }
+            if (pr.stretch_min < pr.stretch_min_in && pr.stretch_min < pr.min_stretch) {
+                femlod_mesh_free(p);
             } else {
                 femlod_mesh_free(m);
                 m = p;
@@ -722,6 +840,15 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
         result->violating_input = bad;
         result->triangles = m->nt;
         result->vertices = m->nv;
+        st = census_into(result, m, mesh, o, err);
+        if (st != FEMLOD_OK) {
+            femlod_mesh_free(m);
+            if (out_log) {
+                femlod_collapse_log_free(*out_log);
+                *out_log = NULL;
+            }
+            return st;
+        }
         result->seconds = now_seconds() - t0;
     }
     *out = m;
