@@ -224,7 +224,8 @@ int fl_imesh_has_edge(const imesh *M, uint32_t a, uint32_t b) {
     return fl_imesh_edge_faces(M, a, b, NULL, 0) > 0;
 }
 
-uint32_t fl_imesh_valence(imesh *M, uint32_t v) {
+/* v's neighbours, each once; with features, only those across a feature edge */
+static uint32_t count_neighbours(imesh *M, uint32_t v, int features) {
     uint32_t s = fl_imesh_next_stamp(M), n = 0;
     const im_list *l = M->vf + v;
     for (uint32_t i = 0; i < l->n; i++) {
@@ -232,11 +233,15 @@ uint32_t fl_imesh_valence(imesh *M, uint32_t v) {
         for (int c = 0; c < 3; c++)
             if (t[c] != v && M->vmark[t[c]] != s) {
                 M->vmark[t[c]] = s;
-                n++;
+                n += !features || fl_imesh_is_feature(M, v, t[c]);
             }
     }
     return n;
 }
+
+uint32_t fl_imesh_valence(imesh *M, uint32_t v) { return count_neighbours(M, v, 0); }
+
+uint32_t fl_imesh_feature_valence(imesh *M, uint32_t v) { return count_neighbours(M, v, 1); }
 
 static int list_add(im_list *l, uint32_t f) {
     if (l->n == l->cap) {

@@ -122,6 +122,8 @@ FL_INTERNAL int fl_imesh_set_feature(imesh *M, uint32_t a, uint32_t b, int on);
 FL_INTERNAL size_t fl_imesh_edge_faces(const imesh *M, uint32_t a, uint32_t b, uint32_t *out, size_t max);
 FL_INTERNAL int fl_imesh_has_edge(const imesh *M, uint32_t a, uint32_t b);
 FL_INTERNAL uint32_t fl_imesh_valence(imesh *M, uint32_t v);
+/* the neighbours of v across a feature edge */
+FL_INTERNAL uint32_t fl_imesh_feature_valence(imesh *M, uint32_t v);
 /* Appends a face (lists, grid); its slot, or IM_DEAD on ENOMEM. */
 FL_INTERNAL uint32_t fl_imesh_add_face(imesh *M, uint32_t a, uint32_t b, uint32_t c);
 FL_INTERNAL void fl_imesh_remove_face(imesh *M, uint32_t f);

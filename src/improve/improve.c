@@ -85,17 +85,7 @@ static int forced_face(const imesh *M, const uint32_t t[3], double minst, double
  * meet there than max_valence (no flip removes a feature edge, no collapse
  * takes a corner). FEMLOD_IMPROVE_CORNER or -1. */
 static int forced_vertex(imesh *M, uint32_t v, int maxval) {
-    uint32_t s = fl_imesh_next_stamp(M), n = 0;
-    const im_list *l = M->vf + v;
-    for (uint32_t i = 0; i < l->n; i++) {
-        const uint32_t *t = M->tri + 3 * (size_t)l->f[i];
-        for (int c = 0; c < 3; c++)
-            if (t[c] != v && M->vmark[t[c]] != s) {
-                M->vmark[t[c]] = s;
-                if (fl_imesh_is_feature(M, v, t[c])) n++;
-            }
-    }
-    return n > (uint32_t)maxval ? FEMLOD_IMPROVE_CORNER : -1;
+    return fl_imesh_feature_valence(M, v) > (uint32_t)maxval ? FEMLOD_IMPROVE_CORNER : -1;
 }
 
 static double wall(void) {
