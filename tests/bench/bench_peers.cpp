@@ -23,6 +23,7 @@
 extern "C" {
 #include "femlod.h"
 }
+#include "bench_util.h"
 
 #include <cmath>
 #include <cstdio>
@@ -31,12 +32,6 @@ extern "C" {
 #include <vector>
 
 typedef OpenMesh::TriMesh_ArrayKernelT<> OMesh;
-
-static double now() {
-    timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static void print_row(const char *tool, double seconds, const femlod_mesh *out, const femlod_mesh *in) {
     femlod_quality q;
@@ -61,7 +56,7 @@ static void run_openmesh(const femlod_mesh *in, size_t target) {
     size_t nv = femlod_mesh_vertex_count(in), nt = femlod_mesh_triangle_count(in);
     const double *p = femlod_mesh_positions(in);
     const uint32_t *t = femlod_mesh_triangles(in);
-    double t0 = now();
+    double t0 = bench_now();
     OMesh m;
     std::vector<OMesh::VertexHandle> vh(nv);
     for (size_t v = 0; v < nv; v++) vh[v] = m.add_vertex(OMesh::Point((float)p[3 * v], (float)p[3 * v + 1], (float)p[3 * v + 2]));
@@ -81,7 +76,7 @@ static void run_openmesh(const femlod_mesh *in, size_t target) {
     dec.initialize();
     dec.decimate_to_faces(0, target);
     m.garbage_collection();
-    double sec = now() - t0;
+    double sec = bench_now() - t0;
     std::vector<double> pos;
     std::vector<uint32_t> tri;
     for (auto v : m.vertices()) {
@@ -104,10 +99,10 @@ static void run_meshopt(const femlod_mesh *in, size_t target) {
     std::vector<float> fpos(3 * nv);
     for (size_t k = 0; k < 3 * nv; k++) fpos[k] = (float)p[k];
     std::vector<unsigned> idx(t, t + 3 * nt), dst(3 * nt);
-    double t0 = now();
+    double t0 = bench_now();
     float err = 0;
     size_t n = meshopt_simplify(dst.data(), idx.data(), idx.size(), fpos.data(), nv, 3 * sizeof(float), 3 * target, 1e30f, 0, &err);
-    double sec = now() - t0;
+    double sec = bench_now() - t0;
     std::vector<double> pos(p, p + 3 * nv);
     std::vector<uint32_t> tri(dst.begin(), dst.begin() + (long)n);
     femlod_mesh *out = from_arrays(pos, tri);
@@ -131,11 +126,11 @@ static void run_femlod(const femlod_mesh *in, size_t target, double rel, int pap
                                           (hi[2] - lo[2]) * (hi[2] - lo[2]));
     }
     femlod_mesh *out = NULL;
-    double t0 = now();
+    double t0 = bench_now();
     if (femlod_simplify(&out, NULL, in, &o, NULL, NULL) != FEMLOD_OK) return;
     static const char *const label[2][2] = {{"femlod (defaults)", "femlod, d 1e-3 diag"},
                                             {"femlod, paper's order", "femlod, paper's + d"}};
-    print_row(label[paper != 0][rel > 0], now() - t0, out, in);
+    print_row(label[paper != 0][rel > 0], bench_now() - t0, out, in);
     femlod_mesh_free(out);
 }
 

@@ -36,6 +36,7 @@
  * ratio of each round compares two runs a few seconds apart; its median
  * and range over the rounds are printed for every femlod mode. */
 #include "femlod.h"
+#include "bench_util.h"
 
 #include <meshoptimizer.h>
 #include <stdio.h>
@@ -49,12 +50,6 @@
 #ifndef FEMLOD_SHARED_DATA
 #define FEMLOD_SHARED_DATA "../shared/data"
 #endif
-
-static double now(void) {
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
 
 static double cpu_now(void) {
     struct timespec t;
@@ -120,9 +115,9 @@ static double meshopt_timed(unsigned *dst, const unsigned *idx, size_t ni, const
         arena_used = 0;
         meshopt_setAllocator(arena_alloc, arena_free);
     }
-    double t0 = now(), c0 = cpu_now();
+    double t0 = bench_now(), c0 = cpu_now();
     *n_out = meshopt_simplify(dst, idx, ni, fpos, nv, 3 * sizeof(float), target_index_count, 1e30f, 0, &e);
-    double t = now() - t0;
+    double t = bench_now() - t0;
     *cpu_out = cpu_now() - c0;
     if (warm) meshopt_setAllocator(malloc, free);
     return t;
@@ -221,13 +216,13 @@ int main(int argc, char **argv) {
                     fprintf(stderr, "bench_simplify: meshoptimizer gave %zu and %zu indices\n", mo_n, mo_p);
                     return 1;
                 }
-                t0 = now();
+                t0 = bench_now();
                 c0 = cpu_now();
                 if (femlod_simplify(&x, NULL, m, &o, &res[mode], &err) != FEMLOD_OK) {
                     fprintf(stderr, "bench_simplify: %s\n", err.message);
                     return 1;
                 }
-                tf[mode][r] = now() - t0;
+                tf[mode][r] = bench_now() - t0;
                 cf[mode][r] = cpu_now() - c0;
                 pr[mode][r] = tpair > 0 ? tf[mode][r] / tpair : 0.0;
                 /* peak memory after this mode's first run (getrusage's

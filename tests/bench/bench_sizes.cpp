@@ -35,6 +35,7 @@
 extern "C" {
 #include "femlod.h"
 }
+#include "bench_util.h"
 
 #include <algorithm>
 #include <cmath>
@@ -55,12 +56,6 @@ extern "C" {
 #include <unistd.h>
 
 typedef OpenMesh::TriMesh_ArrayKernelT<> OMesh;
-
-static double now() {
-    timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
 
 static void die(const char *what, const femlod_error &err) {
     std::fprintf(stderr, "bench_sizes: %s: %s\n", what, err.message);
@@ -100,17 +95,17 @@ static int job(const char *tool, const char *in_path, const char *out_path, size
     std::vector<uint32_t> tri;
     double sec;
     if (std::strcmp(tool, "meshopt") == 0) {
-        double t0 = now();
+        double t0 = bench_now();
         std::vector<float> fpos(3 * nv);
         for (size_t k = 0; k < 3 * nv; k++) fpos[k] = (float)p[k];
         std::vector<unsigned> dst(3 * nt);
         float e = 0;
         size_t n = meshopt_simplify(dst.data(), t, 3 * nt, fpos.data(), nv, 3 * sizeof(float), 3 * target, 1e30f, 0, &e);
-        sec = now() - t0;
+        sec = bench_now() - t0;
         pos.assign(p, p + 3 * nv);
         tri.assign(dst.begin(), dst.begin() + (long)n);
     } else if (std::strcmp(tool, "openmesh") == 0) {
-        double t0 = now();
+        double t0 = bench_now();
         OMesh m;
         std::vector<OMesh::VertexHandle> vh(nv);
         for (size_t v = 0; v < nv; v++)
@@ -131,7 +126,7 @@ static int job(const char *tool, const char *in_path, const char *out_path, size
         dec.initialize();
         dec.decimate_to_faces(0, target);
         m.garbage_collection();
-        sec = now() - t0;
+        sec = bench_now() - t0;
         for (auto v : m.vertices()) {
             OMesh::Point q = m.point(v);
             pos.insert(pos.end(), {q[0], q[1], q[2]});
@@ -222,7 +217,7 @@ static std::string run_child(const std::vector<std::string> &args, run_result &r
     std::vector<char *> argv;
     for (const std::string &a : args) argv.push_back(const_cast<char *>(a.c_str()));
     argv.push_back(NULL);
-    double t0 = now();
+    double t0 = bench_now();
     pid_t pid = fork();
     if (pid == 0) {
         dup2(fd, 1);
@@ -236,7 +231,7 @@ static std::string run_child(const std::vector<std::string> &args, run_result &r
         std::perror("bench_sizes: fork");
         std::exit(1);
     }
-    r.job = now() - t0;
+    r.job = bench_now() - t0;
     r.peak_mb = (double)ru.ru_maxrss / 1024.0;
     std::string out;
     char buf[4096];

@@ -9,6 +9,7 @@
  * the output positions and triangles, one of the collapse log, and the
  * seconds (the only field that may differ between two runs). */
 #include "digest.h"
+#include "bench_util.h"
 #include "femlod.h"
 
 #include <stdio.h>
@@ -19,12 +20,6 @@
 #ifndef FEMLOD_SHARED_DATA
 #define FEMLOD_SHARED_DATA "../shared/data"
 #endif
-
-static double now(void) {
-    struct timespec t;
-    clock_gettime(CLOCK_MONOTONIC, &t);
-    return (double)t.tv_sec + 1e-9 * (double)t.tv_nsec;
-}
 
 typedef struct scase {
     const char *name, *file;
@@ -131,13 +126,13 @@ int main(int argc, char **argv) {
         femlod_mesh *out = NULL;
         femlod_collapse_log *log = NULL;
         femlod_simplify_result res;
-        double t0 = now();
+        double t0 = bench_now();
         if (femlod_simplify(&out, &log, m, &o, &res, &err) != FEMLOD_OK) {
             printf("%-20s error: %s\n", name, err.message);
             femlod_mesh_free(m);
             continue;
         }
-        double t = now() - t0;
+        double t = bench_now() - t0;
         size_t nt = femlod_mesh_triangle_count(out);
         uint64_t hm = digest_mesh(out), hl = digest_log(log);
         printf("%-20s %7zu tris %7zu collapses (pre %zu) %s  mesh %016llx  log %016llx  %7.3f s\n", name, nt,
