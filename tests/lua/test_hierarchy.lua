@@ -503,7 +503,7 @@ do
   T.eq(serial(h:mesh()), coarse_serial, "argument errors change nothing")
   -- Option tables of the functions that take them still reject unknown keys.
   T.errmsg("code:1: bad argument #1 to 'simplify' (unknown key 'hierarchy'; valid keys: area_weighted, "
-    .. "error_order, fast_above, feature_angle, feature_weight, hierarchy_floor, improve, keep_boundary, lock, max_deviation, max_normal_change, max_size, "
+    .. "error_order, fast_above, feature_angle, feature_weight, hierarchy, hierarchy_floor, improve, keep_boundary, lock, max_deviation, max_normal_change, max_size, "
     .. "max_valence, min_stretch, progress, ratio, target, threads, tolerance)",
     "m:simplify { target = 2000, hierarchy = 'x.flh' }", { m = fandisk })
 end
