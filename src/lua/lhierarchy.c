@@ -390,6 +390,9 @@ static int lib_simplify(lua_State *L) {
         h->flat = simplified; /* the box owns it now */
         simplified = NULL;
         h->has_result = 1;
+        /* done ends at 1, as the hierarchy's build makes it end with one
+         * (the run is over: a true returned here changes nothing) */
+        if (so.progress && !pc.stopped) so.progress(so.progress_payload, 1.0);
     }
     /* The hierarchy holds everything the simplified mesh and the log said:
      * both go as soon as it is built. Its building cannot be stopped by a

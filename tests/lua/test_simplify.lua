@@ -627,6 +627,11 @@ do
   T.errmsg(E2 .. "hierarchy: boolean expected, got number)", "m:simplify { hierarchy = 0 }", { m = fandisk })
   T.errmsg(E2 .. "hierarchy_floor: needs the hierarchy (hierarchy = false keeps none))",
     "m:simplify { hierarchy = false, hierarchy_floor = 100 }", { m = fandisk })
+  local last, calls = nil, 0
+  local P2 <close> = fandisk:simplify { target = 2000, hierarchy = false,
+    progress = function(d) last, calls = d, calls + 1 end }
+  T.eq(last, 1, "hierarchy = false: progress ends at 1 (" .. calls .. " calls)")
+  T.check(serial(P2:mesh()) == serial(mb), "hierarchy = false: progress changes nothing")
   local C <close> = fandisk:simplify { target = 2000, hierarchy = false, hierarchy_floor = false }
   T.check(serial(C:mesh()) == serial(mb), "hierarchy = false with hierarchy_floor = false: the same mesh")
   local D <close> = fandisk:simplify { target = 2000, hierarchy = true }
