@@ -944,14 +944,14 @@ static int cmd_simplify(lua_State *L, const cli *c) {
         (!lua_isnil(L, flh) && (st = fl_cli_check_output(lua_tostring(L, flh), "flh")) >= 0) ||
         (st = fl_cli_check_output(out, NULL)) >= 0)
         return st;
-    lua_pushnil(L);
-    lua_setfield(L, opts, "hierarchy");
-    /* Without a hierarchy to write, the collapses past the target would be
-     * wasted: stop at the target unless --hierarchy-floor says otherwise. */
-    if (lua_isnil(L, flh) && lua_getfield(L, opts, "hierarchy_floor") == LUA_TNIL) {
+    /* Without a hierarchy to write (and no --hierarchy-floor), none is
+     * built: no collapse log, and the improve stage's polish may run
+     * (docs/cli.md). */
+    if (lua_isnil(L, flh) && lua_getfield(L, opts, "hierarchy_floor") == LUA_TNIL)
         lua_pushboolean(L, 0);
-        lua_setfield(L, opts, "hierarchy_floor");
-    }
+    else
+        lua_pushnil(L);
+    lua_setfield(L, opts, "hierarchy");
     lua_settop(L, flh);
 
     luaL_requiref(L, "femlod", luaopen_femlod, 0);
@@ -1000,7 +1000,7 @@ static int cmd_simplify(lua_State *L, const cli *c) {
     }
 
     /* A progress bar on stderr when it is a terminal (femlod.progress); it
-     * covers the building of the hierarchy too. */
+     * covers the building of the hierarchy too, when one is built. */
     int bar = push_bar(L, c, "simplify");
     if (bar) {
         lua_getfield(L, bar, "update");

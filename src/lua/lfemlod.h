@@ -69,7 +69,8 @@ FL_LUA_INTERNAL void fl_limprove_open(lua_State *L);
  * and filled only on success, so a closed box is hier == NULL; close() frees
  * the hierarchy and zeroes the box. */
 typedef struct fl_hierarchy {
-    femlod_hierarchy *hier;        /* NULL when closed */
+    femlod_hierarchy *hier;        /* NULL when closed or without a hierarchy */
+    femlod_mesh *flat;             /* hierarchy = false: the simplified mesh, with no hierarchy */
     femlod_simplify_result result; /* zeroed when there is none (has_result 0) */
     int has_result;                /* 0: loaded from a file saved without one */
     size_t log_bytes;              /* the collapse log it was built from; 0 when loaded */
@@ -82,8 +83,9 @@ typedef struct fl_hierarchy {
  * load_hierarchy to the table on the top of the stack and the method
  * simplify to femlod.Mesh (call it after fl_lmesh_open). */
 FL_LUA_INTERNAL void fl_lhierarchy_open(lua_State *L);
-/* The hierarchy at argument arg; raises on a wrong type, a closed one, or
- * one whose size function is running (a refine or coarsen in progress). */
+/* The hierarchy at argument arg; raises on a wrong type, a closed one, one
+ * simplified with hierarchy = false (it keeps no hierarchy), or one whose
+ * size function is running (a refine or coarsen in progress). */
 FL_LUA_INTERNAL fl_hierarchy *fl_lhierarchy_check(lua_State *L, int arg);
 
 /* Reads the simplify options that are plain values (every key but lock and

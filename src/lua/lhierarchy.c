@@ -7,7 +7,11 @@
  * result record. femlod.simplify builds the hierarchy from the input mesh
  * and the collapse log as soon as femlod_simplify returns, then frees the
  * simplified mesh and the log: the hierarchy holds all they said, and
- * h:mesh() extracts the front. Like a Mesh the box is pushed empty, with its
+ * h:mesh() extracts the front. With hierarchy = false the box keeps the
+ * simplified mesh (flat) and no hierarchy: femlod_simplify runs without a
+ * log (no log recorded, no hierarchy built, and the end-of-run polish of
+ * the improve stage may run); h:mesh() copies it, h:stats() and
+ * h:log_bytes() answer, every LOD method raises. Like a Mesh the box is pushed empty, with its
  * metatable and __gc in place, before it is filled, and it frees its C
  * memory in one release shared by __gc, __close and close(). Node ids are
  * 1-based here and in every message (C id + 1).
@@ -52,7 +56,8 @@ static const char *const simplify_keys[] = {
     "min_stretch",    "max_size",       "max_valence",       "feature_angle",
     "feature_weight", "max_normal_change", "keep_boundary",  "area_weighted",
     "error_order",    "fast_above",        "threads",        "lock",
-    "progress",       "hierarchy_floor",   "improve",        NULL};
+    "progress",       "hierarchy_floor",   "improve",        "hierarchy",
+    NULL};
 
 /* The thresholds of type double that `false` switches off, in the order of
  * femlod_simplify_options; max is the largest value allowed. */
@@ -295,19 +300,23 @@ static fl_hierarchy *hierarchy_box(lua_State *L) {
     return h;
 }
 
-/* Frees the hierarchy and refunds its charge (docs/design.md "Caps"). */
+/* Frees the hierarchy (or the flat mesh) and refunds its charge
+ * (docs/design.md "Caps"). */
 static void hierarchy_release(lua_State *L, fl_hierarchy *h) {
     double bytes = h->charged;
     femlod_hierarchy_free(h->hier);
+    femlod_mesh_free(h->flat);
     memset(h, 0, sizeof *h);
     fl_lua_guard *g = bytes > 0 ? fl_lua_guard_get(L) : NULL;
     if (g) g->charge(g, -bytes);
 }
 
-/* Charges a new hierarchy's memory to the cap (raising past it; the box's
- * release refunds the charge either way). */
+/* Charges a new hierarchy's memory (or the flat mesh's) to the cap
+ * (raising past it; the box's release refunds the charge either way). */
 static void hierarchy_charge(lua_State *L, fl_hierarchy *h) {
-    h->charged = (double)femlod_hierarchy_bytes(h->hier);
+    h->charged = h->hier ? (double)femlod_hierarchy_bytes(h->hier)
+                         : fl_lmesh_bytes((double)femlod_mesh_vertex_count(h->flat),
+                                          (double)femlod_mesh_triangle_count(h->flat));
     fl_lua_charge(L, h->charged);
 }
 
@@ -316,6 +325,26 @@ static void hierarchy_charge(lua_State *L, fl_hierarchy *h) {
  * input triangle of work memory (tests/bench, docs/simplify.md) and about 200
  * for the hierarchy built from its log; rounded up. */
 #define SIMPLIFY_BYTES_PER_TRIANGLE 600.0
+/* The same with hierarchy = false: the work memory alone, rounded up. */
+#define SIMPLIFY_FLAT_BYTES_PER_TRIANGLE 400.0
+
+/* Reads the option hierarchy (true by default); false refuses a
+ * hierarchy_floor in force, which only a hierarchy uses. */
+static int read_hierarchy_option(lua_State *L, fl_opts *o) {
+    if (!o->idx) return 1;
+    int t = lua_getfield(L, o->idx, "hierarchy");
+    int keep = t == LUA_TNIL || lua_toboolean(L, -1);
+    if (t != LUA_TNIL && t != LUA_TBOOLEAN)
+        fl_opts_error(o, "hierarchy", lua_pushfstring(L, "boolean expected, got %s", luaL_typename(L, -1)));
+    lua_pop(L, 1);
+    if (!keep) {
+        t = lua_getfield(L, o->idx, "hierarchy_floor");
+        if (t != LUA_TNIL && !(t == LUA_TBOOLEAN && !lua_toboolean(L, -1)))
+            fl_opts_error(o, "hierarchy_floor", "needs the hierarchy (hierarchy = false keeps none)");
+        lua_pop(L, 1);
+    }
+    return keep;
+}
 
 /* femlod.simplify(mesh [, opts]) and mesh:simplify([opts]). */
 static int lib_simplify(lua_State *L) {
@@ -324,6 +353,7 @@ static int lib_simplify(lua_State *L) {
     fl_opts_open(&o, L, 2, simplify_keys);
     femlod_simplify_options so = FEMLOD_SIMPLIFY_OPTIONS_INIT;
     so.hierarchy_floor = 1; /* the hierarchy reaches the coarsest mesh the thresholds allow */
+    int keep = read_hierarchy_option(L, &o);
     if (o.idx) {
         const char *key;
         const char *msg = fl_simplify_read_options(L, o.idx, &so, "false", &key);
@@ -337,7 +367,7 @@ static int lib_simplify(lua_State *L) {
     so.progress_payload = &pc;
     /* Building the hierarchy is the last 5% of done: about its share of
      * the time (cover.obj at ratio 0.1). */
-    pc.scale = 0.95;
+    pc.scale = keep ? 0.95 : 1.0;
     read_lock(L, &o, &so);
 
     /* The lock function may have closed the mesh: look it up again. */
@@ -350,17 +380,26 @@ static int lib_simplify(lua_State *L) {
     femlod_collapse_log *log = NULL;
     luaL_checkstack(L, 4, NULL); /* for fl_progress_call_fn, which must not raise */
     /* under --max-memory: refused before the work memory is taken */
-    fl_lua_reserve(L, SIMPLIFY_BYTES_PER_TRIANGLE * (double)femlod_mesh_triangle_count(mesh));
+    fl_lua_reserve(L, (keep ? SIMPLIFY_BYTES_PER_TRIANGLE : SIMPLIFY_FLAT_BYTES_PER_TRIANGLE) *
+                          (double)femlod_mesh_triangle_count(mesh));
     double t0 = fl_lua_clock();
     *mbox = NULL; /* busy: see the top of the file */
-    femlod_status st = femlod_simplify(&simplified, &log, mesh, &so, &h->result, &err);
+    femlod_status st = femlod_simplify(&simplified, keep ? &log : NULL, mesh, &so, &h->result, &err);
     double t1 = fl_lua_clock();
+    if (!keep && st == FEMLOD_OK && pc.failed == FL_PROGRESS_OK) {
+        h->flat = simplified; /* the box owns it now */
+        simplified = NULL;
+        h->has_result = 1;
+        /* done ends at 1, as the hierarchy's build makes it end with one
+         * (the run is over: a true returned here changes nothing) */
+        if (so.progress && !pc.stopped) so.progress(so.progress_payload, 1.0);
+    }
     /* The hierarchy holds everything the simplified mesh and the log said:
      * both go as soon as it is built. Its building cannot be stopped by a
      * true from the function (the simplification, stopped short or not, is
      * done), only by an error or the time cap; a function that returned true
  * is not called again. The input stays busy until the hierarchy is built. */
-    if (st == FEMLOD_OK && pc.failed == FL_PROGRESS_OK) {
+    if (keep && st == FEMLOD_OK && pc.failed == FL_PROGRESS_OK) {
         femlod_progress_options po = {so.progress, so.progress_payload};
         pc.offset = pc.scale;
         pc.scale = 1.0 - pc.scale;
@@ -388,9 +427,10 @@ static int lib_simplify(lua_State *L) {
         fl_lua_log(L, "simplify: %zu -> %zu triangles, %zu collapses, stopped: %s (%.3f s)",
                    femlod_mesh_triangle_count(mesh), r->triangles, r->collapses,
                    femlod_stop_reason_name(r->stop_reason), t1 - t0);
-        fl_lua_log(L, "build hierarchy: %zu nodes, %zu bytes (%.3f s)",
-                   femlod_hierarchy_node_count(h->hier), femlod_hierarchy_bytes(h->hier),
-                   fl_lua_clock() - t1);
+        if (keep)
+            fl_lua_log(L, "build hierarchy: %zu nodes, %zu bytes (%.3f s)",
+                       femlod_hierarchy_node_count(h->hier), femlod_hierarchy_bytes(h->hier),
+                       fl_lua_clock() - t1);
     }
     lua_settop(L, hidx);
     return 1;
@@ -436,10 +476,20 @@ static int lib_load_hierarchy(lua_State *L) {
  * names them so.
  * ===================================================================== */
 
-fl_hierarchy *fl_lhierarchy_check(lua_State *L, int arg) {
+/* A hierarchy box that is open, with a hierarchy or (hierarchy = false) the
+ * flat mesh: what h:mesh(), h:stats() and h:log_bytes() accept. */
+static fl_hierarchy *check_open(lua_State *L, int arg) {
     fl_hierarchy *h = (fl_hierarchy *)luaL_checkudata(L, arg, FL_HIERARCHY_MT);
     if (h->busy) luaL_error(L, "attempt to use a femlod.Hierarchy inside its own size or progress function");
-    if (!h->hier) luaL_error(L, "attempt to use a closed femlod.Hierarchy");
+    if (!h->hier && !h->flat) luaL_error(L, "attempt to use a closed femlod.Hierarchy");
+    return h;
+}
+
+fl_hierarchy *fl_lhierarchy_check(lua_State *L, int arg) {
+    fl_hierarchy *h = check_open(L, arg);
+    if (!h->hier)
+        luaL_error(L, "this femlod.Hierarchy has only its mesh and stats: "
+                      "simplify with hierarchy = false keeps no hierarchy");
     return h;
 }
 
@@ -504,11 +554,19 @@ static femlod_mesh *push_front_mesh(lua_State *L, fl_hierarchy *h, uint32_t **id
     return *slot;
 }
 
-/* h:mesh(): the current front as a new Mesh. */
+/* h:mesh(): the current front as a new Mesh; with hierarchy = false a copy
+ * of the simplified mesh. */
 static int hierarchy_mesh(lua_State *L) {
-    fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    fl_hierarchy *h = check_open(L, 1);
     no_more_arguments(L, 2);
-    push_front_mesh(L, h, NULL);
+    if (h->hier) {
+        push_front_mesh(L, h, NULL);
+        return 1;
+    }
+    femlod_mesh **slot = fl_lmesh_box(L);
+    femlod_error err;
+    if (femlod_mesh_copy(slot, h->flat, &err) != FEMLOD_OK) return fl_lua_raise(L, &err);
+    fl_lmesh_charge(L, slot);
     return 1;
 }
 
@@ -1223,7 +1281,7 @@ static void set_threshold(lua_State *L, const char *key, double v) {
 }
 
 static int hierarchy_stats(lua_State *L) {
-    const fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    const fl_hierarchy *h = check_open(L, 1);
     if (!h->has_result)
         return luaL_error(L, "this femlod.Hierarchy has no simplification statistics "
                              "(its file was saved without them)");
@@ -1321,7 +1379,7 @@ static int hierarchy_input_vertices(lua_State *L) {
 }
 
 static int hierarchy_log_bytes(lua_State *L) {
-    const fl_hierarchy *h = fl_lhierarchy_check(L, 1);
+    const fl_hierarchy *h = check_open(L, 1);
     lua_pushinteger(L, (lua_Integer)h->log_bytes);
     return 1;
 }
@@ -1339,7 +1397,10 @@ static int hierarchy_gc(lua_State *L) {
 
 static int hierarchy_tostring(lua_State *L) {
     const fl_hierarchy *h = (const fl_hierarchy *)luaL_checkudata(L, 1, FL_HIERARCHY_MT);
-    if (!h->hier)
+    if (h->flat)
+        lua_pushfstring(L, "femlod.Hierarchy (no hierarchy, %I triangles)",
+                        (lua_Integer)femlod_mesh_triangle_count(h->flat));
+    else if (!h->hier)
         lua_pushliteral(L, "femlod.Hierarchy (closed)");
     else
         lua_pushfstring(L, "femlod.Hierarchy (%I nodes, %I triangles on the front)",

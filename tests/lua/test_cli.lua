@@ -558,6 +558,7 @@ do
   local out, flh = path("hier_2000.obj"), path("hier.flh")
   os.remove(flh)
   local code, text, err = run("simplify", fandisk, out, "--target", "2000", "--hierarchy", flh)
+  local text0 = text
   T.eq(code, 0, "simplify --hierarchy: " .. err)
   T.eq(err, "", "simplify --hierarchy: nothing on stderr")
   local h = femlod.load_hierarchy(flh)
@@ -587,6 +588,40 @@ do
     "--hierarchy-floor", "off"), 0, "--hierarchy-floor off")
   T.eq(run("--quiet", "lod", flh_t, lod_t, "--size", "inf"), 0, "lod --size inf of a hierarchy stopped at the target")
   T.check(T.readfile(lod_t) == T.readfile(out), "--hierarchy-floor off: lod --size inf is byte-identical to simplify's OUT")
+  -- Without --hierarchy no hierarchy is built (no log): the same vertices,
+  -- in order, and the same triangles (listed by input triangle), the same
+  -- report but for the times and the .flh line, no "build hierarchy" line.
+  local plain = path("plain_2000.obj")
+  local pcode, ptext, perr = run("-v", "simplify", fandisk, plain, "--target", "2000")
+  T.eq(pcode, 0, "simplify without --hierarchy: " .. perr)
+  T.check(not perr:find("build hierarchy"), "simplify without --hierarchy: no 'build hierarchy' line: " .. perr)
+  T.check(perr:find("femlod: simplify: 12946 %-> 2000 triangles") ~= nil, "simplify without --hierarchy: -v simplify line")
+  local function lines_of(file, prefix)
+    local r = {}
+    for l in T.readfile(file):gmatch("[^\n]+") do if l:sub(1, #prefix) == prefix then r[#r + 1] = l end end
+    return r
+  end
+  T.eq(table.concat(lines_of(plain, "v "), "\n"), table.concat(lines_of(out, "v "), "\n"),
+    "simplify without --hierarchy: the same vertices in the same order")
+  local fa, fb = lines_of(plain, "f "), lines_of(out, "f ")
+  table.sort(fa)
+  table.sort(fb)
+  T.eq(#fa, 2000, "simplify without --hierarchy: 2000 triangles")
+  T.eq(table.concat(fa, "\n"), table.concat(fb, "\n"), "simplify without --hierarchy: the same triangles")
+  local function untimed(t)
+    return (t:gsub("in %d+%.%d+ s", "in T s"):gsub("\n[^\n]*%(hierarchy%)\n$", "\n"):gsub(out:gsub("%p", "%%%0"), "OUT")
+      :gsub(plain:gsub("%p", "%%%0"), "OUT"))
+  end
+  T.eq(untimed(ptext), untimed(text0), "simplify without --hierarchy: the same report")
+  -- On the spider the improve stage runs first; without a log its polish
+  -- runs at the end too: no more triangles left below min_stretch.
+  local sp = P.shared .. "/spider_binary.stl"
+  local _, t_log = run("simplify", sp, path("sp_log.obj"), "--ratio", "0.3", "--hierarchy-floor", "off")
+  local _, t_nolog = run("simplify", sp, path("sp_nolog.obj"), "--ratio", "0.3")
+  local v_log = tonumber(t_log:match("violating output: (%d+) triangles"))
+  local v_nolog = tonumber(t_nolog:match("violating output: (%d+) triangles"))
+  T.check(v_log and v_nolog and v_nolog <= v_log, "spider without --hierarchy: no more violating triangles: "
+    .. tostring(v_nolog) .. " <= " .. tostring(v_log))
   code, text = run("lod", flh, lod0, "--size", "0")
   T.eq(code, 0, "lod --size 0")
   local m0 = femlod.load(lod0)

@@ -502,10 +502,13 @@ do
     "local t = { refine = h.refine }; t:refine(0)", env)
   T.eq(serial(h:mesh()), coarse_serial, "argument errors change nothing")
   -- Option tables of the functions that take them still reject unknown keys.
-  T.errmsg("code:1: bad argument #1 to 'simplify' (unknown key 'hierarchy'; valid keys: area_weighted, "
-    .. "error_order, fast_above, feature_angle, feature_weight, hierarchy_floor, improve, keep_boundary, lock, max_deviation, max_normal_change, max_size, "
-    .. "max_valence, min_stretch, progress, ratio, target, threads, tolerance)",
+  -- The CLI's --hierarchy PATH is no simplify option: hierarchy is a boolean.
+  T.errmsg("code:1: bad argument #1 to 'simplify' (hierarchy: boolean expected, got string)",
     "m:simplify { target = 2000, hierarchy = 'x.flh' }", { m = fandisk })
+  T.errmsg("code:1: bad argument #1 to 'simplify' (unknown key 'flh'; valid keys: area_weighted, "
+    .. "error_order, fast_above, feature_angle, feature_weight, hierarchy, hierarchy_floor, improve, keep_boundary, lock, max_deviation, max_normal_change, max_size, "
+    .. "max_valence, min_stretch, progress, ratio, target, threads, tolerance)",
+    "m:simplify { target = 2000, flh = 'x.flh' }", { m = fandisk })
 end
 -- }======
 

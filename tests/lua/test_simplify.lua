@@ -3,7 +3,8 @@
 -- per triangle, from the output's own positions), topology is kept, the
 -- stats table, `false` switching thresholds off, option errors (text and
 -- position), lock by indices and by function, keep_boundary, progress,
--- determinism, and the life cycle (close, <close>, __gc).
+-- determinism, the life cycle (close, <close>, __gc), and hierarchy = false
+-- (the same mesh and stats without a log or hierarchy; the LOD methods raise).
 -- Run by ctest: femlod run test_simplify.lua femlod=... tmp=... data=... shared=... examples=...
 
 local T = dofile((arg[0]:match("^(.*)/") or ".") .. "/check.lua")
@@ -318,10 +319,10 @@ end
 -- {====== option errors: text and position
 local env = { m = fandisk, femlod = femlod }
 local E = "code:1: bad argument #1 to 'simplify' ("
-T.errmsg(E .. "unknown key 'targt'; valid keys: area_weighted, error_order, fast_above, feature_angle, feature_weight, hierarchy_floor, improve, "
+T.errmsg(E .. "unknown key 'targt'; valid keys: area_weighted, error_order, fast_above, feature_angle, feature_weight, hierarchy, hierarchy_floor, improve, "
   .. "keep_boundary, lock, max_deviation, max_normal_change, max_size, max_valence, min_stretch, "
   .. "progress, ratio, target, threads, tolerance)", "m:simplify { targt = 100 }", env)
-T.errmsg(E .. "unexpected number key 1; valid keys: area_weighted, error_order, fast_above, feature_angle, feature_weight, hierarchy_floor, improve, "
+T.errmsg(E .. "unexpected number key 1; valid keys: area_weighted, error_order, fast_above, feature_angle, feature_weight, hierarchy, hierarchy_floor, improve, "
   .. "keep_boundary, lock, max_deviation, max_normal_change, max_size, max_valence, min_stretch, "
   .. "progress, ratio, target, threads, tolerance)", "m:simplify { 100 }", env)
 T.errmsg(E .. "target: integer >= 1 expected, got 0)", "m:simplify { target = 0 }", env)
@@ -552,6 +553,110 @@ do
 end
 -- }======
 
+-- {====== hierarchy = false: no log, no hierarchy; the same mesh when the polish does nothing
+-- The triangles as a sorted list of vertex-index triples (femlod_simplify
+-- orders them by the input triangles they descend from, the hierarchy's
+-- front by when they appeared).
+local function triangle_set(mesh)
+  local out = {}
+  for _, t in ipairs(mesh:triangles()) do out[#out + 1] = table.concat(t, " ") end
+  table.sort(out)
+  return table.concat(out, "\n")
+end
+local function vertex_serial(mesh)
+  local out = {}
+  for _, p in ipairs(mesh:positions()) do out[#out + 1] = key(p) end
+  return table.concat(out, "\n")
+end
+-- The stats but the times and the hierarchy's extent (hierarchy_*: the
+-- default hierarchy goes past the target), as one string.
+local function stats_serial(s)
+  local out = {}
+  local function walk(prefix, t)
+    local keys = {}
+    for k in pairs(t) do keys[#keys + 1] = k end
+    table.sort(keys)
+    for _, k in ipairs(keys) do
+      local v = t[k]
+      if type(v) == "table" then walk(prefix .. k .. ".", v)
+      elseif k ~= "seconds" and k ~= "improve_seconds" and not k:find("^hierarchy_") then out[#out + 1] = prefix .. k .. "=" .. tostring(v) end
+    end
+  end
+  walk("", s)
+  return table.concat(out, "\n")
+end
+-- Output triangles below stretch t, measured here.
+local function count_below(mesh, t)
+  local pos, n = mesh:positions(), 0
+  for _, tr in ipairs(mesh:triangles()) do
+    if stretch_size(pos[tr[1]], pos[tr[2]], pos[tr[3]]) < t then n = n + 1 end
+  end
+  return n
+end
+do
+  local A <close> = fandisk:simplify { target = 2000 }
+  local B <close> = fandisk:simplify { target = 2000, hierarchy = false }
+  local ma, mb = A:mesh(), B:mesh()
+  T.eq(mb:counts().triangles, 2000, "hierarchy = false: fandisk to 2000")
+  T.check(vertex_serial(ma) == vertex_serial(mb), "hierarchy = false: fandisk: the same vertices, in the same order")
+  T.check(triangle_set(ma) == triangle_set(mb), "hierarchy = false: fandisk: the same triangles")
+  T.check(serial(mb) == serial(B:mesh()), "hierarchy = false: each h:mesh() gives the same mesh")
+  T.eq(stats_serial(B:stats()), stats_serial(A:stats()), "hierarchy = false: fandisk: the same stats")
+  T.eq(B:stats().hierarchy_triangles, 2000, "hierarchy = false: hierarchy_triangles is the output's count")
+  T.eq(B:stats().hierarchy_stop, "target", "hierarchy = false: hierarchy_stop is the run's stop")
+  T.check(report.stats(B):find("^stop: target; ") ~= nil, "hierarchy = false: report.stats takes it")
+  T.eq(B:log_bytes(), 0, "hierarchy = false: no log")
+  T.check(A:log_bytes() > 0, "with a hierarchy: a log")
+  T.eq(tostring(B), "femlod.Hierarchy (no hierarchy, 2000 triangles)", "hierarchy = false: tostring")
+  check_run("hierarchy = false", B, IN.triangles)
+  local NOH = "code:1: this femlod.Hierarchy has only its mesh and stats: simplify with hierarchy = false keeps no hierarchy"
+  local envb = { h = B, tmp = P.tmp }
+  T.errmsg(NOH, "h:refine(0)", envb)
+  T.errmsg(NOH, "h:coarsen(1)", envb)
+  T.errmsg(NOH, "h:rescale { target = 1000 }", envb)
+  T.errmsg(NOH, "h:front()", envb)
+  T.errmsg(NOH, "h:counts()", envb)
+  T.errmsg(NOH, "h:node(1)", envb)
+  T.errmsg(NOH, "h:save(tmp .. '/nohier.flh')", envb)
+  T.errmsg(NOH, "h:collapses()", envb)
+  B:close()
+  T.eq(tostring(B), "femlod.Hierarchy (closed)", "hierarchy = false: closed")
+  T.errmsg("code:1: attempt to use a closed femlod.Hierarchy", "h:mesh()", envb)
+  T.errmsg("code:1: attempt to use a closed femlod.Hierarchy", "h:stats()", envb)
+  local E2 = "code:1: bad argument #1 to 'simplify' ("
+  T.errmsg(E2 .. "hierarchy: boolean expected, got number)", "m:simplify { hierarchy = 0 }", { m = fandisk })
+  T.errmsg(E2 .. "hierarchy_floor: needs the hierarchy (hierarchy = false keeps none))",
+    "m:simplify { hierarchy = false, hierarchy_floor = 100 }", { m = fandisk })
+  local last, calls = nil, 0
+  local P2 <close> = fandisk:simplify { target = 2000, hierarchy = false,
+    progress = function(d) last, calls = d, calls + 1 end }
+  T.eq(last, 1, "hierarchy = false: progress ends at 1 (" .. calls .. " calls)")
+  T.check(serial(P2:mesh()) == serial(mb), "hierarchy = false: progress changes nothing")
+  local C <close> = fandisk:simplify { target = 2000, hierarchy = false, hierarchy_floor = false }
+  T.check(serial(C:mesh()) == serial(mb), "hierarchy = false with hierarchy_floor = false: the same mesh")
+  local D <close> = fandisk:simplify { target = 2000, hierarchy = true }
+  T.check(serial(D:mesh()) == serial(ma), "hierarchy = true is the default")
+end
+-- The spider breaks min_stretch: the improve stage runs first, and without
+-- a log its polish runs at the end; it leaves no more triangles below 0.2.
+do
+  local spider = femlod.load(P.shared .. "/spider_binary.stl")
+  local A <close> = spider:simplify { ratio = 0.3 }
+  local B <close> = spider:simplify { ratio = 0.3, hierarchy = false }
+  local sa, sb = A:stats(), B:stats()
+  T.check(sa.improved and sb.improved, "spider: the improve stage ran")
+  local na, nb = count_below(A:mesh(), 0.2), count_below(B:mesh(), 0.2)
+  print(string.format("spider ratio 0.3: below stretch 0.2: %d with the hierarchy, %d without (%d -> %d triangles)",
+    na, nb, sa.triangles, sb.triangles))
+  T.check(nb <= na, "spider: hierarchy = false leaves no more triangles below 0.2: " .. nb .. " <= " .. na)
+  T.eq(sb.violating_input, nb, "spider: hierarchy = false: violating_input is the measured count")
+  T.eq(sb.triangles, B:mesh():counts().triangles, "spider: hierarchy = false: stats().triangles is the mesh's")
+  local m2 = B:mesh():quality()
+  T.check(m2.closed == spider:quality().closed, "spider: hierarchy = false keeps closedness")
+  spider:close()
+end
+-- }======
+
 -- {====== cover.obj with the paper's thresholds (0.15, 0.2, 15, 12) to 12,000
 do
   local cover = femlod.load(P.shared .. "/cover.obj")
@@ -563,6 +668,11 @@ do
   T.check(m.stretch_min >= 0.2, "cover: every triangle's stretch >= 0.2: " .. m.stretch_min)
   T.check(m.size_max <= 15, "cover: every triangle's size <= 15: " .. m.size_max)
   T.check(m.valence_max <= 12, "cover: valence <= 12: " .. m.valence_max)
+  local hf <close> = cover:simplify { target = 12000, tolerance = 0.15, min_stretch = 0.2, max_size = 15, max_valence = 12,
+    hierarchy = false }
+  T.check(vertex_serial(hf:mesh()) == vertex_serial(h:mesh()) and triangle_set(hf:mesh()) == triangle_set(h:mesh()),
+    "cover: hierarchy = false gives the same mesh")
+  T.eq(stats_serial(hf:stats()), stats_serial(s), "cover: hierarchy = false: the same stats")
   print(report.row(cover, "cover.obj", "original"))
   print(report.row(h:mesh(), "cover.obj", "simplified 1"))
   print(string.format("cover.obj -> 12000: %.3f s", s.seconds))
