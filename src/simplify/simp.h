@@ -494,8 +494,8 @@ FL_INTERNAL femlod_status fl_simp_setup_mesh(simp *S, const femlod_mesh *mesh, c
  * the queue. */
 FL_INTERNAL femlod_status fl_simp_setup_features(simp *S, const femlod_mesh *mesh, const femlod_simplify_options *o,
                                                  femlod_error *err);
-/* Moves every live face list to the front of a new arena (two thirds
- * spare); 0 on ENOMEM. */
+/* Moves every live face list to the front of the arena, in place, and
+ * resizes it to two thirds spare; 0 on ENOMEM. */
 FL_INTERNAL int fl_simp_compact_refs(simp *S);
 /* w becomes a view of the run with its own ring and scratch kept. */
 FL_INTERNAL void fl_simp_view(simp *w, const simp *S);
