@@ -170,7 +170,6 @@ static void simp_free(simp *S) {
     free(S->face);
     free(S->fin);
     free(S->tedge);
-    free(S->fsz);
     free(S->cone);
     free(S->fmark);
     free(S->fmade);
