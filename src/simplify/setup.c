@@ -174,6 +174,8 @@ int fl_simp_compact_refs(simp *S) {
         uint32_t *nr = fl_alloc(cap, sizeof *nr);
         if (!nr) return 0;
         memcpy(nr, S->refs, w * sizeof *nr);
+        /* a block inside the heap keeps its pages resident after free */
+        release_pages(S->refs, w * sizeof *S->refs);
         free(S->refs);
         S->refs = nr;
     }
