@@ -129,6 +129,8 @@ static void release_pages(void *p, size_t bytes) {
 #endif
 }
 
+#define COMPACT_CHUNK ((size_t)1 << 18) /* entries: 1 MiB */
+
 /* In place, without a second arena (docs/design.md "The face-list arena
  * compacted in place"): each live list's first entry is swapped with its
  * vertex (kept in fstart meanwhile) and its start marked in a bitmap; one
@@ -173,9 +175,14 @@ int fl_simp_compact_refs(simp *S) {
     if (cap > S->caprefs) {
         uint32_t *nr = fl_alloc(cap, sizeof *nr);
         if (!nr) return 0;
-        memcpy(nr, S->refs, w * sizeof *nr);
-        /* a block inside the heap keeps its pages resident after free */
-        release_pages(S->refs, w * sizeof *S->refs);
+        /* copied a mebibyte at a time, each part's old pages given back
+         * once copied (a block inside the heap keeps its pages resident
+         * after free): the lists are not resident twice */
+        for (size_t at = 0; at < w; at += COMPACT_CHUNK) {
+            size_t k = w - at < COMPACT_CHUNK ? w - at : COMPACT_CHUNK;
+            memcpy(nr + at, S->refs + at, k * sizeof *nr);
+            release_pages(S->refs + at, k * sizeof *S->refs);
+        }
         free(S->refs);
         S->refs = nr;
     }
