@@ -27,6 +27,9 @@
 
 #include <stdlib.h>
 #include <unistd.h>
+#if defined(__linux__)
+#include <sys/mman.h>
+#endif
 
 static inline uint32_t min3u(const uint32_t t[3]) {
     uint32_t m = t[0] < t[1] ? t[0] : t[1];
@@ -114,52 +117,75 @@ void fl_simp_free_views(simp *S, simp *W, int n) {
 
 /* {====== the face-list arena */
 
-/* compact_refs in vertex parts: each part's lists, at its offset */
-typedef struct compact_ctx {
-    simp *S;
-    uint32_t *nr;
-    size_t at[16];
-} compact_ctx;
-
-static void compact_count(void *arg, size_t v0, size_t v1, int part) {
-    compact_ctx *C = arg;
-    size_t n = 0;
-    for (size_t v = v0; v < v1; v++) n += C->S->fcount[v];
-    C->at[part] = n;
+/* Gives the whole pages inside [p, p + bytes) back to the system; their
+ * contents read as zero afterwards (Linux; elsewhere nothing). */
+static void release_pages(void *p, size_t bytes) {
+#if defined(__linux__) && defined(MADV_DONTNEED)
+    uintptr_t a = ((uintptr_t)p + 4095) & ~(uintptr_t)4095, b = ((uintptr_t)p + bytes) & ~(uintptr_t)4095;
+    if (b > a) (void)madvise((void *)a, b - a, MADV_DONTNEED);
+#else
+    (void)p;
+    (void)bytes;
+#endif
 }
 
-static void compact_copy(void *arg, size_t v0, size_t v1, int part) {
-    compact_ctx *C = arg;
-    simp *S = C->S;
-    size_t w = C->at[part], w0 = w;
-    for (size_t v = v0; v < v1; v++) w += S->fcount[v];
-    fl_populate(C->nr + w0, (w - w0) * sizeof *C->nr); /* the part copied now */
-    w = w0;
-    for (size_t v = v0; v < v1; v++) {
-        memcpy(C->nr + w, S->refs + S->fstart[v], S->fcount[v] * sizeof *C->nr);
-        S->fstart[v] = (uint32_t)w;
-        w += S->fcount[v];
-    }
-}
+#define COMPACT_CHUNK ((size_t)1 << 18) /* entries: 1 MiB */
 
+/* In place, without a second arena (docs/design.md "The face-list arena
+ * compacted in place"): each live list's first entry is swapped with its
+ * vertex (kept in fstart meanwhile) and its start marked in a bitmap; one
+ * walk up the arena then moves every list down to the write position, in
+ * arena order, so no list is overwritten before it has moved. The lists
+ * keep their entries and order; only where they sit changes. */
 int fl_simp_compact_refs(simp *S) {
-    compact_ctx C;
-    C.S = S;
-    fl_pool_ranges(S->nthreads, S->nv, compact_count, &C);
-    size_t total = 0;
-    for (int t = 0; t < fl_pool_parts(S->nthreads, S->nv); t++) {
-        size_t n = C.at[t];
-        C.at[t] = total;
-        total += n;
+    size_t n = S->nrefs, words = n / 64 + 1;
+    uint64_t *start = fl_calloc(words, sizeof *start);
+    if (!start) return 0;
+    for (size_t v = 0; v < S->nv; v++) {
+        if (!S->fcount[v]) continue;
+        size_t p = S->fstart[v];
+        S->fstart[v] = S->refs[p];
+        S->refs[p] = (uint32_t)v;
+        start[p / 64] |= (uint64_t)1 << (p % 64);
     }
-    /* room for as many appended lists again: compaction stays amortised O(1) */
-    size_t cap = 2 * total + 1024;
-    C.nr = fl_alloc(cap, sizeof *C.nr);
-    if (!C.nr) return 0;
-    fl_pool_ranges(S->nthreads, S->nv, compact_copy, &C);
-    free(S->refs);
-    S->refs = C.nr;
-    S->nrefs = total;
+    size_t w = 0;
+    for (size_t k = 0; k < words; k++) {
+        while (start[k]) {
+            size_t p = 64 * k + (size_t)__builtin_ctzll(start[k]);
+            start[k] &= start[k] - 1;
+            uint32_t v = S->refs[p];
+            size_t c = S->fcount[v];
+            memmove(S->refs + w, S->refs + p, c * sizeof *S->refs);
+            S->refs[w] = S->fstart[v];
+            S->fstart[v] = (uint32_t)w;
+            w += c;
+        }
+    }
+    free(start);
+    for (size_t v = 0; v < S->nv; v++)
+        if (!S->fcount[v]) S->fstart[v] = (uint32_t)w;
+    S->nrefs = w;
+    /* room for as many appended lists again: compaction stays amortised
+     * O(1). The pages past the live lists go back to the system first
+     * (they come back as zero pages when used); a grown arena is then a new
+     * block holding only the live lists (glibc's realloc, measured, made
+     * the peak 1.4 MB higher than this copy) */
+    size_t cap = 2 * w + 1024;
+    release_pages(S->refs + w, (S->caprefs - w) * sizeof *S->refs);
+    if (cap > S->caprefs) {
+        uint32_t *nr = fl_alloc(cap, sizeof *nr);
+        if (!nr) return 0;
+        /* copied a mebibyte at a time, each part's old pages given back
+         * once copied (a block inside the heap keeps its pages resident
+         * after free): the lists are not resident twice */
+        for (size_t at = 0; at < w; at += COMPACT_CHUNK) {
+            size_t k = w - at < COMPACT_CHUNK ? w - at : COMPACT_CHUNK;
+            memcpy(nr + at, S->refs + at, k * sizeof *nr);
+            release_pages(S->refs + at, k * sizeof *S->refs);
+        }
+        free(S->refs);
+        S->refs = nr;
+    }
     S->caprefs = cap;
     return 1;
 }
@@ -254,10 +280,21 @@ static uint32_t *morton_slots(const double *pos, size_t nv, uint32_t *perm, int 
     return inv;
 }
 
+/* the face caches in parts, and each part's longest edge (a maximum: the
+ * same for every cut into parts) */
+typedef struct cache_ctx {
+    simp *S;
+    float size_max[16];
+} cache_ctx;
+
 static void face_cache_range(void *arg, size_t f0, size_t f1, int part) {
-    (void)part;
-    simp *S = arg;
-    for (size_t f = f0; f < f1; f++) face_update_cache(S, (uint32_t)f);
+    cache_ctx *C = arg;
+    float m = 0.0f;
+    for (size_t f = f0; f < f1; f++) {
+        float sz = face_update_cache(C->S, (uint32_t)f);
+        if (sz > m) m = sz;
+    }
+    C->size_max[part] = m;
 }
 
 /* Whether the faces around v form one fan (flooded from the first face
@@ -642,7 +679,7 @@ femlod_status fl_simp_setup_mesh(simp *S, const femlod_mesh *mesh, const femlod_
     if (!ALLOC(S->pos, 3 * nv) || !CALLOC(S->q, nv) || !ALLOC(S->node, nv) || !ALLOC(S->fstart, nv + 1) ||
         !CALLOC(S->fcount, nv) || !CALLOC(S->val, nv) || !CALLOC(S->vflag, nv) || !CALLOC(S->fdeg, nv) ||
         !CALLOC(S->vmark, nv) || !(S->face = alloc_lines(nt, sizeof *S->face)) || !ALLOC(S->tedge, 3 * nt) ||
-        !ALLOC(S->fsz, nt) || !CALLOC(S->fmark, nt) || !CALLOC(S->fmade, nt))
+        !CALLOC(S->fmark, nt) || !CALLOC(S->fmade, nt))
         return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory (%zu triangles)", nt_in);
     /* Vertex slots in Morton order of position: the neighbours of a vertex
      * then sit near it in memory, which halves the time on large meshes
@@ -700,7 +737,9 @@ femlod_status fl_simp_setup_mesh(simp *S, const femlod_mesh *mesh, const femlod_
     memset(S->fcount, 0, nv * sizeof *S->fcount);
     fl_pool_ranges(nth, nv, faces_refs, &C);
     SETUP_T(2);
-    fl_pool_ranges(nth, nt, face_cache_range, S);
+    cache_ctx FC;
+    FC.S = S;
+    fl_pool_ranges(nth, nt, face_cache_range, &FC);
 
     SETUP_T(3);
     /* edges, numbered in increasing (a, b) order: each vertex a lists its
@@ -762,7 +801,7 @@ femlod_status fl_simp_setup_mesh(simp *S, const femlod_mesh *mesh, const femlod_
     m->diag = sqrt(dist2(lo, hi));
     m->mean_edge = ne ? elen / (double)ne : 0.0;
     m->size_max = 0.0;
-    for (size_t f = 0; f < nt; f++) m->size_max = mx(m->size_max, (double)S->fsz[f]);
+    for (int t = 0; t < fl_pool_parts(nth, nt); t++) m->size_max = mx(m->size_max, (double)FC.size_max[t]);
     S->eps = 1e-10 * (m->diag > 0 ? m->diag : 1.0);
     return FEMLOD_OK;
 }
@@ -843,6 +882,8 @@ femlod_status fl_simp_setup_features(simp *S, const femlod_mesh *mesh, const fem
         }
     free(S->slot_of);
     S->slot_of = NULL;
+    free(S->fmark); /* the pinched-vertex flood's only */
+    S->fmark = NULL;
 
     if (S->cone_on) {
         if (!ALLOC(S->cone, 4 * nt)) return fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");

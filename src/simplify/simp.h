@@ -233,12 +233,11 @@ typedef struct simp {
     /* faces */
     size_t nt, live, nt_in;
     /* per face slot its corners (v[0] = UINT32_MAX: dead), unit normal
-     * (NaN for degenerate) and 1 / fsz (for Sz_DIF): one 32-byte record,
+     * (NaN for degenerate) and 1 / its longest edge (for Sz_DIF): one 32-byte record,
      * so that the corners' read brings the rest (64-byte aligned) */
     face_rec *face;
     uint32_t *tedge;
     uint32_t *fin; /* input triangle index of each face slot */
-    float *fsz;  /* longest edge */
     float *cone; /* axis xyz, half-angle (radians) */
     uint32_t *fmark; /* set-up only: the pinched-vertex flood (with vertex stamps) */
     uint8_t *fmade; /* 1: made by a collapse, not read from the input (plane_rule) */
@@ -357,9 +356,10 @@ static inline void face_bbox(const simp *S, uint32_t f, double lo[3], double hi[
     }
 }
 
-/* The face cache of f from its corners: unit normal, longest edge, its
- * inverse (set-up, and each face a collapse moves). */
-static inline void face_update_cache(simp *S, uint32_t f) {
+/* The face cache of f from its corners: unit normal, the inverse of the
+ * longest edge (set-up, and each face a collapse moves); returns the
+ * longest edge (a float: inv is 1 / that float). */
+static inline float face_update_cache(simp *S, uint32_t f) {
     const uint32_t *t = S->face[f].v;
     const double *a = P(S, t[0]), *b = P(S, t[1]), *c = P(S, t[2]);
     double e1[3], e2[3], n[3];
@@ -371,8 +371,9 @@ static inline void face_update_cache(simp *S, uint32_t f) {
      * false, so tri_eval skips the turn test without a branch of its own */
     for (int k = 0; k < 3; k++) S->face[f].n[k] = l > 0 ? (float)(n[k] / l) : __builtin_nanf("");
     double L2 = mx(dot3(e1, e1), mx(dot3(e2, e2), dist2(b, c)));
-    S->fsz[f] = (float)sqrt(L2);
-    S->face[f].inv = 1.0 / (double)S->fsz[f];
+    float size = (float)sqrt(L2);
+    S->face[f].inv = 1.0 / (double)size;
+    return size;
 }
 
 /* Grows *p to at least n elements of elem bytes (doubling); 0 on ENOMEM. */
@@ -494,8 +495,8 @@ FL_INTERNAL femlod_status fl_simp_setup_mesh(simp *S, const femlod_mesh *mesh, c
  * the queue. */
 FL_INTERNAL femlod_status fl_simp_setup_features(simp *S, const femlod_mesh *mesh, const femlod_simplify_options *o,
                                                  femlod_error *err);
-/* Moves every live face list to the front of a new arena (two thirds
- * spare); 0 on ENOMEM. */
+/* Moves every live face list to the front of the arena, in place, and
+ * resizes it to two thirds spare; 0 on ENOMEM. */
 FL_INTERNAL int fl_simp_compact_refs(simp *S);
 /* w becomes a view of the run with its own ring and scratch kept. */
 FL_INTERNAL void fl_simp_view(simp *w, const simp *S);

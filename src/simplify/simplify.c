@@ -132,6 +132,8 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
     return FEMLOD_OK;
 }
 
+static void release_freed_memory(size_t triangles);
+
 /* The set-up in the order its parts need: the mesh measured, the options
  * resolved against it, then what depends on them, and the grid. */
 static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simplify_options *o, size_t *dropped,
@@ -144,6 +146,9 @@ static femlod_status setup(simp *S, const femlod_mesh *mesh, const femlod_simpli
     if (st == FEMLOD_OK &&
         !fl_simp_build_grid(S, m.mean_edge > 0.0 ? FEMLOD_SIMPLIFY_GRID_CELL * m.mean_edge : 1.0))
         st = fl_error(err, FEMLOD_ENOMEM, "simplify: out of memory");
+    /* the set-up's temporaries (sort keys, edge sides, face maps) are
+     * freed, but their pages inside the heap stay resident until trimmed */
+    if (st == FEMLOD_OK) release_freed_memory(S->nt);
     return st;
 }
 
@@ -170,7 +175,6 @@ static void simp_free(simp *S) {
     free(S->face);
     free(S->fin);
     free(S->tedge);
-    free(S->fsz);
     free(S->cone);
     free(S->fmark);
     free(S->fmade);
