@@ -655,6 +655,12 @@ static int locked_at(void *payload, double x, double y, double z) {
     return L->n && bsearch(q, L->p, L->n, 3 * sizeof *L->p, cmp_point) != NULL;
 }
 
+/* A stage's result takes the least stretch below both min_stretch and its
+ * input's: never kept (docs/design.md "The improve stage inside simplify"). */
+static int lowers_floor(const femlod_improve_report *r) {
+    return r->stretch_min < r->stretch_min_in && r->stretch_min < r->min_stretch;
+}
+
 /* The honest count (docs/design.md "What remains, and why"): the output's
  * elements that break a threshold, by reason, from femlod_improve_census
  * with the simplification's thresholds; locked input vertices are the
@@ -760,7 +766,7 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
         /* the simplification never goes below min(min_stretch, the input's
          * least stretch): a stage that went below both (its splits make
          * triangles worse than the input's worst on the way) is not used */
-        if (rep.stretch_min < rep.stretch_min_in && rep.stretch_min < rep.min_stretch) {
+        if (lowers_floor(&rep)) {
             femlod_mesh_free(better);
             better = NULL;
             free(lock);
@@ -805,7 +811,7 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
                 femlod_mesh_free(m);
                 return st;
             }
-            if (pr.stretch_min < pr.stretch_min_in && pr.stretch_min < pr.min_stretch) {
+            if (lowers_floor(&pr)) {
                 /* as before the simplification: never below both; then the
                  * polish without splits, whose changes each raise the
                  * least stretch where they act */
@@ -817,7 +823,7 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
                     return st;
                 }
             }
-            if (pr.stretch_min < pr.stretch_min_in && pr.stretch_min < pr.min_stretch) {
+            if (lowers_floor(&pr)) {
                 femlod_mesh_free(p);
             } else {
                 femlod_mesh_free(m);

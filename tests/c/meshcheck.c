@@ -120,3 +120,54 @@ femlod_mesh *meshcheck_load(const char *dir, const char *name) {
     }
     return m;
 }
+
+/* {====== the same triangles up to vertex numbering */
+
+typedef struct tri9 {
+    double p[9];
+} tri9;
+
+static int cmp_pt(const double *a, const double *b) {
+    for (int k = 0; k < 3; k++)
+        if (a[k] != b[k]) return a[k] < b[k] ? -1 : 1;
+    return 0;
+}
+
+static int cmp_tri9(const void *x, const void *y) {
+    const tri9 *a = x, *b = y;
+    for (int k = 0; k < 9; k++)
+        if (a->p[k] != b->p[k]) return a->p[k] < b->p[k] ? -1 : 1;
+    return 0;
+}
+
+/* Each triangle as its corner positions from the least corner on, sorted. */
+static tri9 *canonical(const femlod_mesh *m, size_t *n) {
+    size_t nt = femlod_mesh_triangle_count(m), k = 0;
+    tri9 *t = malloc((nt ? nt : 1) * sizeof *t);
+    if (!t) return NULL;
+    const double *p = femlod_mesh_positions(m);
+    const uint32_t *tr = femlod_mesh_triangles(m);
+    for (size_t i = 0; i < nt; i++) {
+        const uint32_t *v = tr + 3 * i;
+        if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
+        int s = 0;
+        for (int c = 1; c < 3; c++)
+            if (cmp_pt(p + 3 * (size_t)v[c], p + 3 * (size_t)v[s]) < 0) s = c;
+        for (int c = 0; c < 3; c++) memcpy(t[k].p + 3 * c, p + 3 * (size_t)v[(s + c) % 3], 3 * sizeof(double));
+        k++;
+    }
+    qsort(t, k, sizeof *t, cmp_tri9);
+    *n = k;
+    return t;
+}
+
+int meshcheck_same_triangles(const femlod_mesh *a, const femlod_mesh *b) {
+    size_t na = 0, nb = 0;
+    tri9 *ta = canonical(a, &na), *tb = canonical(b, &nb);
+    int same = ta && tb && na == nb && memcmp(ta, tb, na * sizeof *ta) == 0;
+    free(ta);
+    free(tb);
+    return same;
+}
+
+/* }====== */

@@ -49,51 +49,6 @@ static femlod_mesh *load(const char *name) {
     return m;
 }
 
-/* Canonical form of a mesh for comparison up to vertex renumbering: each
- * triangle as its three corner positions, rotated to start at the smallest
- * corner (orientation kept), triangles sorted. */
-typedef struct { double p[9]; } tri9;
-
-static int cmp_pt(const double *a, const double *b) {
-    for (int k = 0; k < 3; k++)
-        if (a[k] != b[k]) return a[k] < b[k] ? -1 : 1;
-    return 0;
-}
-
-static int cmp_tri9(const void *x, const void *y) {
-    const tri9 *a = x, *b = y;
-    for (int k = 0; k < 9; k++)
-        if (a->p[k] != b->p[k]) return a->p[k] < b->p[k] ? -1 : 1;
-    return 0;
-}
-
-static tri9 *canonical(const femlod_mesh *m, size_t *n) {
-    size_t nt = femlod_mesh_triangle_count(m), k = 0;
-    tri9 *t = malloc((nt ? nt : 1) * sizeof *t);
-    const double *p = femlod_mesh_positions(m);
-    const uint32_t *tr = femlod_mesh_triangles(m);
-    for (size_t i = 0; i < nt; i++) {
-        const uint32_t *v = tr + 3 * i;
-        if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue; /* as the hierarchy drops them */
-        int s = 0;
-        for (int c = 1; c < 3; c++)
-            if (cmp_pt(p + 3 * v[c], p + 3 * v[s]) < 0) s = c;
-        for (int c = 0; c < 3; c++) memcpy(t[k].p + 3 * c, p + 3 * v[(s + c) % 3], 3 * sizeof(double));
-        k++;
-    }
-    qsort(t, k, sizeof *t, cmp_tri9);
-    *n = k;
-    return t;
-}
-
-static int same_mesh(const femlod_mesh *a, const femlod_mesh *b) {
-    size_t na, nb;
-    tri9 *ta = canonical(a, &na), *tb = canonical(b, &nb);
-    int same = na == nb && memcmp(ta, tb, na * sizeof *ta) == 0;
-    free(ta);
-    free(tb);
-    return same;
-}
 
 static femlod_mesh *front_mesh(femlod_hierarchy *h) {
     femlod_mesh *m = NULL;
@@ -387,7 +342,7 @@ static void run(const char *name, size_t target, size_t random_ops, unsigned see
 
     /* the first front is the simplification output */
     femlod_mesh *m = front_mesh(h);
-    CHECK(same_mesh(m, out));
+    CHECK(meshcheck_same_triangles(m, out));
     femlod_mesh_free(m);
     CHECK(femlod_hierarchy_validate(h, &err) == FEMLOD_OK);
 
@@ -396,7 +351,7 @@ static void run(const char *name, size_t target, size_t random_ops, unsigned see
     CHECK(femlod_hierarchy_refine(h, 0.0, NULL, NULL, &ops, &err) == FEMLOD_OK);
     CHECK(ops == femlod_collapse_log_count(log));
     m = front_mesh(h);
-    CHECK(same_mesh(m, in));
+    CHECK(meshcheck_same_triangles(m, in));
     femlod_mesh_free(m);
     CHECK(femlod_hierarchy_validate(h, &err) == FEMLOD_OK);
 
@@ -404,7 +359,7 @@ static void run(const char *name, size_t target, size_t random_ops, unsigned see
     CHECK(femlod_hierarchy_coarsen(h, INFINITY, NULL, NULL, &ops, &err) == FEMLOD_OK);
     CHECK(ops == femlod_collapse_log_count(log));
     m = front_mesh(h);
-    CHECK(same_mesh(m, out));
+    CHECK(meshcheck_same_triangles(m, out));
     femlod_mesh_free(m);
 
     /* random mixed operations, the invariant after every batch */
@@ -477,7 +432,7 @@ static void run(const char *name, size_t target, size_t random_ops, unsigned see
         /* the loaded hierarchy still goes all the way down and up */
         CHECK(femlod_hierarchy_refine(g, 0.0, NULL, NULL, NULL, &err) == FEMLOD_OK);
         femlod_mesh *c = front_mesh(g);
-        CHECK(same_mesh(c, in));
+        CHECK(meshcheck_same_triangles(c, in));
         femlod_mesh_free(a);
         femlod_mesh_free(b);
         femlod_mesh_free(c);
@@ -930,7 +885,7 @@ static void test_curvature_lod(void) {
     CHECK(strcmp(err.message, "no curvature: call femlod_hierarchy_set_curvature first") == 0);
     CHECK(ops == 0);
     CHECK(femlod_hierarchy_input_mesh(h, &im, NULL) == FEMLOD_OK);
-    CHECK(same_mesh(im, in));
+    CHECK(meshcheck_same_triangles(im, in));
     size_t nv = femlod_mesh_vertex_count(im);
     double *kappa = calloc(nv, sizeof(double));
     CHECK(kappa != NULL);
@@ -1128,7 +1083,7 @@ static void test_from_log(void) {
         CHECK(log == NULL);
         CHECK(ref && h && same_hierarchy(ref, h));
         femlod_mesh *f = front_mesh(h);
-        CHECK(same_mesh(f, out));
+        CHECK(meshcheck_same_triangles(f, out));
         femlod_mesh_free(f);
         femlod_hierarchy_free(h);
         femlod_hierarchy_free(ref);
@@ -1165,7 +1120,7 @@ static void test_progress(void) {
     CHECK(femlod_hierarchy_create(&h, in, log, &po, NULL) == FEMLOD_OK);
     CHECK_PROGRESS_DONE(pr, 50);
     femlod_mesh *f = front_mesh(h);
-    CHECK(same_mesh(f, out));
+    CHECK(meshcheck_same_triangles(f, out));
     femlod_mesh_free(f);
     femlod_hierarchy_free(h);
     h = (femlod_hierarchy *)&pr; /* must stay as it is */

@@ -158,51 +158,6 @@ static void run_case(const char *name, const femlod_mesh *m, const femlod_improv
     femlod_mesh_free(out2);
 }
 
-/* The same triangles by position, in any order and rotation (triangles with
- * a repeated corner left out, as the hierarchy drops them). */
-typedef struct tri9 {
-    double p[9];
-} tri9;
-
-static int cmp_tri9(const void *x, const void *y) {
-    const tri9 *a = x, *b = y;
-    for (int k = 0; k < 9; k++)
-        if (a->p[k] != b->p[k]) return a->p[k] < b->p[k] ? -1 : 1;
-    return 0;
-}
-
-static int cmp_pt(const double *a, const double *b) {
-    for (int k = 0; k < 3; k++)
-        if (a[k] != b[k]) return a[k] < b[k] ? -1 : 1;
-    return 0;
-}
-
-static tri9 *canonical(const femlod_mesh *m, size_t *n) {
-    size_t nt = m->nt, k = 0;
-    tri9 *t = malloc((nt ? nt : 1) * sizeof *t);
-    for (size_t i = 0; i < nt; i++) {
-        const uint32_t *v = m->tri + 3 * i;
-        if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;
-        int s = 0;
-        for (int c = 1; c < 3; c++)
-            if (cmp_pt(m->pos + 3 * (size_t)v[c], m->pos + 3 * (size_t)v[s]) < 0) s = c;
-        for (int c = 0; c < 3; c++) memcpy(t[k].p + 3 * c, m->pos + 3 * (size_t)v[(s + c) % 3], 3 * sizeof(double));
-        k++;
-    }
-    qsort(t, k, sizeof *t, cmp_tri9);
-    *n = k;
-    return t;
-}
-
-static int same_triangles(const femlod_mesh *a, const femlod_mesh *b) {
-    size_t na, nb;
-    tri9 *ta = canonical(a, &na), *tb = canonical(b, &nb);
-    int same = na == nb && memcmp(ta, tb, na * sizeof *ta) == 0;
-    free(ta);
-    free(tb);
-    return same;
-}
-
 /* femlod_simplify at ratio 0.3 with the improve stage on (the default):
  * every output triangle meets min_stretch and max_size or is counted in
  * violating_input; every vertex within max_valence; closed stays closed;
@@ -296,10 +251,10 @@ static void simplify_case(const char *name, const femlod_mesh *m) {
     CHECK(res2.improved == (base != NULL));
     if (log && femlod_hierarchy_create(&h, m, log, NULL, NULL) == FEMLOD_OK) {
         CHECK(femlod_hierarchy_extract(h, &front, NULL, NULL) == FEMLOD_OK);
-        CHECK(front && same_triangles(front, outl));
+        CHECK(front && meshcheck_same_triangles(front, outl));
         CHECK(femlod_hierarchy_refine(h, 0.0, NULL, NULL, NULL, NULL) == FEMLOD_OK);
         CHECK(femlod_hierarchy_extract(h, &finest, NULL, NULL) == FEMLOD_OK);
-        CHECK(finest && same_triangles(finest, base ? base : m));
+        CHECK(finest && meshcheck_same_triangles(finest, base ? base : m));
     } else
         CHECK(!"hierarchy");
     femlod_hierarchy_free(h);
