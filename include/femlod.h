@@ -594,7 +594,7 @@ typedef struct femlod_simplify_result {
      * improvement stage and polish: what they left), and by reason
      * (femlod_improve_census on the output; sums to violating_input); the
      * output's vertices above max_valence, by reason; the forced corners'
-     * angles, degrees (0: none). Not stored in a saved hierarchy. */
+     * angles, degrees (0: none). */
     size_t violating_input;
     size_t violating_by[FEMLOD_IMPROVE_REASON_COUNT];
     size_t violating_valence;
@@ -604,7 +604,7 @@ typedef struct femlod_simplify_result {
      * left, after the stop, by first failing check (each edge once): which
      * threshold binds at the stop; stop_taken: the edges that pass it, which
      * the checks made when an edge is taken from the queue (intersection,
-     * deviation) refuse. Zero otherwise; not stored in a saved hierarchy. */
+     * deviation) refuse. Zero otherwise. */
     size_t stop_rejected[FEMLOD_REJECT_COUNT];
     size_t stop_taken;
     /* Of stop_rejected's topology: the edges refused as non-manifold [0],

@@ -30,7 +30,8 @@ static const unsigned char MAGIC[8] = {0x89, 'F', 'L', 'H', '\r', '\n', 0x1a, '\
 #define FLH_VERSION 1u
 #define FLH_HAS_RESULT 1u
 #define RESULT_FIELDS_V1 (17u + FEMLOD_REJECT_COUNT) /* files written before the log's extent was stored */
-#define RESULT_FIELDS (20u + FEMLOD_REJECT_COUNT)
+#define RESULT_FIELDS_V2 (20u + FEMLOD_REJECT_COUNT) /* files written before the output's census was stored */
+#define RESULT_FIELDS (RESULT_FIELDS_V2 + 2u * FEMLOD_IMPROVE_REASON_COUNT + FEMLOD_REJECT_COUNT + 11u)
 
 /* {====== writing: a stream that keeps the CRC */
 
@@ -182,6 +183,19 @@ femlod_status femlod_hierarchy_save(const femlod_hierarchy *h, const char *path,
         w_u64(w, r->hierarchy_triangles);
         w_u64(w, (uint64_t)r->hierarchy_stop);
         w_u64(w, (uint64_t)(int64_t)r->hierarchy_binding);
+        /* the output's census and the stop's count */
+        for (int k = 0; k < FEMLOD_IMPROVE_REASON_COUNT; k++) w_u64(w, r->violating_by[k]);
+        w_u64(w, r->violating_valence);
+        for (int k = 0; k < FEMLOD_IMPROVE_REASON_COUNT; k++) w_u64(w, r->violating_valence_by[k]);
+        w_f64(w, r->corner_angle_min);
+        w_f64(w, r->corner_angle_max);
+        for (int k = 0; k < FEMLOD_REJECT_COUNT; k++) w_u64(w, r->stop_rejected[k]);
+        w_u64(w, r->stop_taken);
+        for (int k = 0; k < 3; k++) w_u64(w, r->stop_topology[k]);
+        w_u64(w, (uint64_t)r->improved);
+        w_u64(w, r->improve_operations);
+        w_u64(w, r->improve_triangles);
+        w_u64(w, r->polish_operations);
     }
     w_flush(w);
     uLong crc = w->crc;
@@ -379,7 +393,7 @@ femlod_status femlod_hierarchy_load_memory(femlod_hierarchy **out, const void *b
     if (flags & FLH_HAS_RESULT) {
         if (!need(&r, 4, "the result")) goto parse_error;
         uint32_t fields = r_u32(&r);
-        if ((fields != RESULT_FIELDS && fields != RESULT_FIELDS_V1) ||
+        if ((fields != RESULT_FIELDS && fields != RESULT_FIELDS_V2 && fields != RESULT_FIELDS_V1) ||
             !need(&r, 8 * (size_t)fields, "the result")) {
             if (r.st == FEMLOD_OK)
                 st = fl_error(err, FEMLOD_EPARSE, "%s: result block has %u fields, expected %u",
@@ -412,7 +426,7 @@ femlod_status femlod_hierarchy_load_memory(femlod_hierarchy **out, const void *b
         res.hierarchy_triangles = res.triangles;
         res.hierarchy_stop = res.stop_reason;
         res.hierarchy_binding = FEMLOD_REJECT_COUNT;
-        if (fields == RESULT_FIELDS) {
+        if (fields != RESULT_FIELDS_V1) {
             res.hierarchy_triangles = (size_t)r_u64(&r);
             uint64_t hs = r_u64(&r);
             res.hierarchy_stop = hs == 1 ? FEMLOD_STOP_NO_VALID_EDGE
@@ -420,6 +434,20 @@ femlod_status femlod_hierarchy_load_memory(femlod_hierarchy **out, const void *b
                                            : FEMLOD_STOP_TARGET;
             int64_t hb = (int64_t)r_u64(&r);
             res.hierarchy_binding = hb >= 0 && hb < FEMLOD_REJECT_COUNT ? (int)hb : FEMLOD_REJECT_COUNT;
+        }
+        if (fields == RESULT_FIELDS) {
+            for (int k = 0; k < FEMLOD_IMPROVE_REASON_COUNT; k++) res.violating_by[k] = (size_t)r_u64(&r);
+            res.violating_valence = (size_t)r_u64(&r);
+            for (int k = 0; k < FEMLOD_IMPROVE_REASON_COUNT; k++) res.violating_valence_by[k] = (size_t)r_u64(&r);
+            res.corner_angle_min = r_f64(&r);
+            res.corner_angle_max = r_f64(&r);
+            for (int k = 0; k < FEMLOD_REJECT_COUNT; k++) res.stop_rejected[k] = (size_t)r_u64(&r);
+            res.stop_taken = (size_t)r_u64(&r);
+            for (int k = 0; k < 3; k++) res.stop_topology[k] = (size_t)r_u64(&r);
+            res.improved = r_u64(&r) != 0;
+            res.improve_operations = (size_t)r_u64(&r);
+            res.improve_triangles = (size_t)r_u64(&r);
+            res.polish_operations = (size_t)r_u64(&r);
         }
     }
     if (r.at != r.size) {

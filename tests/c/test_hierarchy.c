@@ -428,6 +428,15 @@ static void run(const char *name, size_t target, size_t random_ops, unsigned see
                      3 * sizeof(uint32_t) * femlod_mesh_triangle_count(a)) == 0);
         CHECK(r2.triangles == r.triangles && r2.min_stretch == r.min_stretch &&
               r2.max_valence == r.max_valence && r2.stop_reason == r.stop_reason);
+        /* the output's census and the stop's count are stored too */
+        CHECK(r2.violating_input == r.violating_input && r2.violating_valence == r.violating_valence &&
+              memcmp(r2.violating_by, r.violating_by, sizeof r.violating_by) == 0 &&
+              memcmp(r2.violating_valence_by, r.violating_valence_by, sizeof r.violating_valence_by) == 0 &&
+              r2.corner_angle_min == r.corner_angle_min && r2.corner_angle_max == r.corner_angle_max);
+        CHECK(memcmp(r2.stop_rejected, r.stop_rejected, sizeof r.stop_rejected) == 0 &&
+              r2.stop_taken == r.stop_taken && memcmp(r2.stop_topology, r.stop_topology, sizeof r.stop_topology) == 0);
+        CHECK(r2.improved == r.improved && r2.improve_operations == r.improve_operations &&
+              r2.improve_triangles == r.improve_triangles && r2.polish_operations == r.polish_operations);
         CHECK(femlod_hierarchy_validate(g, &err) == FEMLOD_OK);
         /* the loaded hierarchy still goes all the way down and up */
         CHECK(femlod_hierarchy_refine(g, 0.0, NULL, NULL, NULL, &err) == FEMLOD_OK);
