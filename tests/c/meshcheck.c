@@ -109,6 +109,26 @@ size_t meshcheck_self_intersections(const femlod_mesh *m, double eps) {
     return 0;
 }
 
+int meshcheck_same_for_threads(const femlod_mesh *m, const femlod_simplify_options *o) {
+    int same = 1;
+    for (int fast = 0; fast < 2; fast++) {
+        femlod_mesh *a = NULL, *b = NULL;
+        femlod_simplify_options q = *o;
+        q.fast_above = fast ? 2.0 : FEMLOD_SIMPLIFY_OFF;
+        q.threads = 1;
+        int ok = femlod_simplify(&a, NULL, m, &q, NULL, NULL) == FEMLOD_OK;
+        q.threads = 2;
+        ok = ok && femlod_simplify(&b, NULL, m, &q, NULL, NULL) == FEMLOD_OK;
+        if (!ok || a->nv != b->nv || a->nt != b->nt ||
+            memcmp(femlod_mesh_positions(a), femlod_mesh_positions(b), 3 * sizeof(double) * a->nv) != 0 ||
+            memcmp(femlod_mesh_triangles(a), femlod_mesh_triangles(b), 3 * sizeof(uint32_t) * a->nt) != 0)
+            same = 0;
+        femlod_mesh_free(a);
+        femlod_mesh_free(b);
+    }
+    return same;
+}
+
 femlod_mesh *meshcheck_load(const char *dir, const char *name) {
     char path[1024];
     snprintf(path, sizeof path, "%s/%s", dir, name);
