@@ -5,6 +5,7 @@
  *   improve.c   femlod_improve: options, rounds, census, output
  *   ops.c       flip, split, collapse, relaxation: a change built aside,
  *               checked, then written
+ *   samples.c   the input samples of the backward bound, held by faces
  *   imesh.c     the working mesh: faces, vertex face lists, feature edges,
  *               vertex classes, the face grid
  *   surface.c   the input surface: nearest point and distance
@@ -163,6 +164,32 @@ static inline void im_box(const double *a, const double *b, const double *c, dou
 
 /* {====== ops.c */
 
+/* The input samples of the backward bound (samples.c): each held by one
+ * live face, within the bound of it. */
+typedef struct im_samples {
+    double *pt;      /* 3 per sample */
+    uint32_t *next;  /* per sample: the next one of its face's list, IM_DEAD: none */
+    size_t n, cap;
+    uint32_t *head;  /* per face slot: its first sample, IM_DEAD: none */
+    size_t caph;
+    /* the change checked last: the samples it moves, and to which added face (index in the change) */
+    uint32_t *pend, *pend_to;
+    size_t npend, cappend;
+    int oom;
+} im_samples;
+
+/* Samples of M's faces as given (the input): its vertices, points along its
+ * edges and inside its faces at most spacing apart (at most 8 steps). */
+FL_INTERNAL int fl_imsamp_init(im_samples *S, const imesh *M, double spacing);
+FL_INTERNAL void fl_imsamp_free(im_samples *S);
+/* 1 when every sample of the faces rm lies within r of one of the nadd
+ * triangles T (corner pointers); each one's nearest is kept for commit. */
+FL_INTERNAL int fl_imsamp_place(im_samples *S, const uint32_t *rm, size_t nrm, const double *const (*T)[3],
+                                size_t nadd, double r);
+/* After the change is written: the samples placed last move to the added
+ * faces' slots; 0 on ENOMEM. */
+FL_INTERNAL int fl_imsamp_commit(im_samples *S, const uint32_t *rm, size_t nrm, const uint32_t *slots, size_t nadd);
+
 typedef struct im_params {
     double minst, maxsz, maxdev, cos_nc;
     int maxval;
@@ -173,6 +200,7 @@ typedef struct im_params {
 typedef struct im_ctx {
     imesh *M;
     im_surface *S;
+    im_samples *samp; /* the backward bound's samples; NULL when max_deviation is off */
     const im_params *p;
     size_t flips, splits, collapses, relaxations;
     size_t refused[16];

@@ -594,6 +594,14 @@ static femlod_status improve_run(femlod_mesh **out, const femlod_mesh *mesh, con
     fl_progress prog;
     fl_progress_init(&prog, o.progress, o.progress_payload, (size_t)rounds);
     int nothing = c.st == 0 && c.sz == 0 && c.val == 0;
+    /* the backward bound's samples, at the grid's step (docs/design.md "The
+     * two-sided bound of the stage") */
+    im_samples samp;
+    memset(&samp, 0, sizeof samp);
+    if (ok && !nothing && p.maxdev > 0) {
+        ok = fl_imsamp_init(&samp, &M, h);
+        R.C.samp = &samp;
+    }
     census_list CL = {NULL, NULL, 0, 0};
     if (ok && census_only && !nothing && !census_take(&R, &CL)) ok = 0;
     for (int round = 0; ok && !nothing && round < rounds; round++) {
@@ -674,6 +682,7 @@ static femlod_status improve_run(femlod_mesh **out, const femlod_mesh *mesh, con
     free(R.vreason);
     fl_imesh_free(&M);
     fl_imsurf_free(&S);
+    fl_imsamp_free(&samp);
     rep.seconds = wall() - t0;
     if (report && st == FEMLOD_OK) *report = rep;
     return st;

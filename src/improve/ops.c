@@ -162,6 +162,17 @@ static int check(im_ctx *C, change *ch) {
             if (fl_tri_tri_intersect(q.T, ch->add[i], Q, ch->add[j], M->eps)) return FEMLOD_IMPROVE_INTERSECTION;
         }
     }
+    /* backward, last: the input samples the removed faces hold find a
+     * place on the added ones (commit moves them there) */
+    if (C->samp) {
+        const double *T[MAX_CHANGE][3];
+        for (size_t i = 0; i < ch->nadd; i++) corners(M, ch, ch->add[i], T[i]);
+        if (!fl_imsamp_place(C->samp, ch->rm, ch->nrm, (const double *const (*)[3])T, ch->nadd,
+                             DEV_MARGIN * p->maxdev)) {
+            if (C->samp->oom) C->oom = 1;
+            return FEMLOD_IMPROVE_DEVIATION;
+        }
+    }
     return -1;
 }
 
@@ -169,11 +180,16 @@ static int commit(im_ctx *C, change *ch) {
     imesh *M = C->M;
     for (size_t i = 0; i < ch->nrm; i++) fl_imesh_remove_face(M, ch->rm[i]);
     if (ch->mv != IM_DEAD) memcpy(M->pos + 3 * (size_t)ch->mv, ch->mpos, sizeof ch->mpos);
+    uint32_t slot[MAX_CHANGE];
     for (size_t i = 0; i < ch->nadd; i++)
-        if (fl_imesh_add_face(M, ch->add[i][0], ch->add[i][1], ch->add[i][2]) == IM_DEAD) {
+        if ((slot[i] = fl_imesh_add_face(M, ch->add[i][0], ch->add[i][1], ch->add[i][2])) == IM_DEAD) {
             C->oom = 1;
             return 0;
         }
+    if (C->samp && !fl_imsamp_commit(C->samp, ch->rm, ch->nrm, slot, ch->nadd)) {
+        C->oom = 1;
+        return 0;
+    }
     return 1;
 }
 

@@ -119,12 +119,14 @@ static void run_case(const char *name, const femlod_mesh *m, const femlod_improv
     double eps = 1e-10 * diag_of(m);
     size_t xi = meshcheck_self_intersections(m, eps), xo = meshcheck_self_intersections(out, eps);
     CHECK(xo <= xi);
-    /* the distance to the input within max_deviation (sampled: 1% slack for
-     * the samples between those the checks take) */
+    /* the distance to the input within max_deviation both ways: the output
+     * near the input, and the input near the output (sampled: 1% slack for
+     * the points between those the checks take) */
     femlod_hausdorff_result h;
     femlod_hausdorff_options ho = FEMLOD_HAUSDORFF_OPTIONS_INIT;
     CHECK(femlod_mesh_hausdorff(out, m, &ho, &h, NULL) == FEMLOD_OK);
     CHECK(h.forward <= 1.01 * rep.max_deviation);
+    CHECK(h.backward <= 1.01 * rep.max_deviation);
     /* every vertex on the input surface, or within the bound (brute force
      * on the small cases) */
     if (m->nt < 5000) {
