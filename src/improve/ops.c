@@ -165,8 +165,135 @@ static int check(im_ctx *C, change *ch) {
     return -1;
 }
 
+/* {====== transactions */
+
+#define TX_PUSH(arr, n, cap)                                                                                   \
+    do {                                                                                                       \
+        if ((n) == (cap)) {                                                                                    \
+            size_t c_ = (cap) ? 2 * (cap) : 16;                                                                \
+            void *p_ = fl_realloc((arr), c_, sizeof *(arr));                                                   \
+            if (!p_) {                                                                                         \
+                C->oom = 1;                                                                                    \
+                return;                                                                                        \
+            }                                                                                                  \
+            (arr) = p_;                                                                                        \
+            (cap) = c_;                                                                                        \
+        }                                                                                                      \
+        (n)++;                                                                                                 \
+    } while (0)
+
+static void tx_removed(im_ctx *C, uint32_t f) {
+    im_tx *T = &C->tx;
+    if (!T->active || f >= T->nt0) return;
+    TX_PUSH(T->rm, T->nrm, T->caprm);
+    im_rmface *r = T->rm + T->nrm - 1;
+    r->f = f;
+    memcpy(r->t, C->M->tri + 3 * (size_t)f, sizeof r->t);
+    r->st = im_face_stretch(C->M, f);
+}
+
+static void tx_moved(im_ctx *C, uint32_t v) {
+    im_tx *T = &C->tx;
+    if (!T->active || v >= T->nv0) return;
+    TX_PUSH(T->mv, T->nmv, T->capmv);
+    T->mv[T->nmv - 1].v = v;
+    memcpy(T->mv[T->nmv - 1].p, im_P(C->M, v), sizeof T->mv[0].p);
+}
+
+static void tx_class(im_ctx *C, uint32_t v) {
+    im_tx *T = &C->tx;
+    if (!T->active) return;
+    TX_PUSH(T->vc, T->nvc, T->capvc);
+    T->vc[T->nvc - 1].v = v;
+    T->vc[T->nvc - 1].was = C->M->vclass[v];
+}
+
+static void tx_feature(im_ctx *C, uint32_t a, uint32_t b) {
+    im_tx *T = &C->tx;
+    if (!T->active) return;
+    TX_PUSH(T->fe, T->nfe, T->capfe);
+    T->fe[T->nfe - 1].a = a;
+    T->fe[T->nfe - 1].b = b;
+    T->fe[T->nfe - 1].was = (uint8_t)fl_imesh_is_feature(C->M, a, b);
+}
+
+/* sets a feature edge on or off, noted in a transaction; 0 on ENOMEM */
+static int set_feature(im_ctx *C, uint32_t a, uint32_t b, int on) {
+    tx_feature(C, a, b);
+    return fl_imesh_set_feature(C->M, a, b, on);
+}
+
+void fl_imtx_begin(im_ctx *C) {
+    im_tx *T = &C->tx;
+    T->active = 1;
+    T->nt0 = C->M->nt;
+    T->nv0 = C->M->nv;
+    T->ops0[0] = C->flips;
+    T->ops0[1] = C->splits;
+    T->ops0[2] = C->collapses;
+    T->ops0[3] = C->relaxations;
+    memcpy(T->refused0, C->refused, sizeof T->refused0);
+    T->nrm = T->nmv = T->nfe = T->nvc = 0;
+}
+
+static void tx_undo(im_ctx *C) {
+    im_tx *T = &C->tx;
+    imesh *M = C->M;
+    for (size_t f = T->nt0; f < M->nt; f++)
+        if (M->tri[3 * f] != IM_DEAD) fl_imesh_remove_face(M, (uint32_t)f);
+    for (size_t i = T->nmv; i-- > 0;) memcpy(M->pos + 3 * (size_t)T->mv[i].v, T->mv[i].p, sizeof T->mv[i].p);
+    for (size_t i = T->nfe; i-- > 0;)
+        if (!fl_imesh_set_feature(M, T->fe[i].a, T->fe[i].b, T->fe[i].was)) C->oom = 1;
+    for (size_t i = T->nvc; i-- > 0;) M->vclass[T->vc[i].v] = T->vc[i].was;
+    for (size_t i = 0; i < T->nrm; i++)
+        if (!fl_imesh_restore_face(M, T->rm[i].f, T->rm[i].t)) C->oom = 1;
+    C->flips = T->ops0[0];
+    C->splits = T->ops0[1];
+    C->collapses = T->ops0[2];
+    C->relaxations = T->ops0[3];
+    memcpy(C->refused, T->refused0, sizeof T->refused0);
+}
+
+int fl_imtx_end(im_ctx *C) {
+    im_tx *T = &C->tx;
+    imesh *M = C->M;
+    double minst = C->p->minst, lo_old = 1.0, lo_new = 1.0;
+    size_t old_bad = 0, new_bad = 0;
+    T->active = 0;
+    for (size_t i = 0; i < T->nrm; i++) {
+        lo_old = fmin(lo_old, T->rm[i].st);
+        old_bad += T->rm[i].st < minst;
+    }
+    for (size_t f = T->nt0; f < M->nt; f++) {
+        if (M->tri[3 * f] == IM_DEAD) continue;
+        double s = im_face_stretch(M, (uint32_t)f);
+        lo_new = fmin(lo_new, s);
+        new_bad += s < minst;
+    }
+    int keep = !C->oom && T->nrm > 0 && (!C->p->strict || !(lo_new < fmin(minst, lo_old))) &&
+               (new_bad < old_bad || (new_bad == old_bad && lo_new > lo_old + 1e-9));
+    if (keep || C->oom) return keep;
+    tx_undo(C);
+    C->refused[FEMLOD_IMPROVE_STRETCH]++;
+    for (size_t i = 0; i < T->nrm; i++) M->freason[T->rm[i].f] = FEMLOD_IMPROVE_STRETCH + 1;
+    return 0;
+}
+
+void fl_imtx_free(im_ctx *C) {
+    free(C->tx.rm);
+    free(C->tx.mv);
+    free(C->tx.fe);
+    free(C->tx.vc);
+    memset(&C->tx, 0, sizeof C->tx);
+}
+
+/* }====== */
+
 static int commit(im_ctx *C, change *ch) {
     imesh *M = C->M;
+    for (size_t i = 0; i < ch->nrm; i++) tx_removed(C, ch->rm[i]);
+    if (ch->mv != IM_DEAD) tx_moved(C, ch->mv);
+    if (C->oom) return 0;
     for (size_t i = 0; i < ch->nrm; i++) fl_imesh_remove_face(M, ch->rm[i]);
     if (ch->mv != IM_DEAD) memcpy(M->pos + 3 * (size_t)ch->mv, ch->mpos, sizeof ch->mpos);
     for (size_t i = 0; i < ch->nadd; i++)
@@ -338,6 +465,13 @@ int fl_imop_split(im_ctx *C, uint32_t a, uint32_t b, const double *at, int *why)
         ch.corr[ch.nadd][0] = (int)i;
         ch.corr[ch.nadd++][1] = -1;
     }
+    /* the floor rule: alone, no face below min(min_stretch, the least of
+     * those removed); in a transaction, judged with the rest */
+    if (C->p->strict && !C->tx.active && new_min(M, &ch) < fmin(C->p->minst, old_min(M, &ch))) {
+        *why = FEMLOD_IMPROVE_STRETCH;
+        refuse(C, &ch, FEMLOD_IMPROVE_STRETCH);
+        return 0;
+    }
     int r = check(C, &ch);
     if (r >= 0) {
         *why = r;
@@ -354,8 +488,8 @@ int fl_imop_split(im_ctx *C, uint32_t a, uint32_t b, const double *at, int *why)
     M->vdepth[m] = (uint8_t)depth;
     if (!commit(C, &ch)) return 0;
     if (feat) {
-        fl_imesh_set_feature(M, a, b, 0);
-        if (!fl_imesh_set_feature(M, a, m, 1) || !fl_imesh_set_feature(M, m, b, 1)) {
+        set_feature(C, a, b, 0);
+        if (!set_feature(C, a, m, 1) || !set_feature(C, m, b, 1)) {
             C->oom = 1;
             return 0;
         }
@@ -502,10 +636,11 @@ int fl_imop_collapse(im_ctx *C, uint32_t a, uint32_t b, int *why) {
         int fxy = fl_imesh_is_feature(M, x, y);
         if (!commit(C, ch)) break;
         for (int i = 0; i < nf; i++) {
-            fl_imesh_set_feature(M, x, fz[i], 0);
-            if (!fl_imesh_set_feature(M, y, fz[i], 1)) C->oom = 1;
+            set_feature(C, x, fz[i], 0);
+            if (!set_feature(C, y, fz[i], 1)) C->oom = 1;
         }
-        if (fxy) fl_imesh_set_feature(M, x, y, 0);
+        if (fxy) set_feature(C, x, y, 0);
+        tx_class(C, x);
         M->vclass[x] = IM_FIXED; /* gone: no face uses it */
         C->collapses++;
         done = 1;
