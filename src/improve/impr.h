@@ -204,6 +204,10 @@ typedef struct im_tx {
     size_t nfe, capfe;
     im_vcchange *vc;
     size_t nvc, capvc;
+    struct {
+        uint32_t v, was;
+    } *vl;                           /* vertices splits took past max_valence, their valence before */
+    size_t nvl, capvl;
 } im_tx;
 
 /* The refusals (femlod_improve_reason values, +1 in freason). */

@@ -242,7 +242,24 @@ static void refine_bad(run *R, size_t nt0, size_t nv0) {
                 feat = e;
         }
         if (feat >= 0) pick = feat;
-        if (!fl_imop_split(C, t[(pick + 1) % 3], t[(pick + 2) % 3], NULL, &w)) {
+        /* its shortest edge collapsed when that raises the least stretch
+         * there (a needle); else the split, at the apex's foot when inside
+         * the edge (a cap: right triangles), else at the midpoint */
+        int sh = 0;
+        for (int e = 1; e < 3; e++)
+            if (l2[e] < l2[sh]) sh = e;
+        if (fl_imop_collapse(C, t[(sh + 1) % 3], t[(sh + 2) % 3], &w)) {
+            made++;
+            continue;
+        }
+        t = M->tri + 3 * (size_t)g;
+        const double *pu = im_P(M, t[(pick + 1) % 3]), *pv = im_P(M, t[(pick + 2) % 3]), *pw = im_P(M, t[pick]);
+        double uv[3], uw[3], at[3];
+        sub3(uv, pv, pu);
+        sub3(uw, pw, pu);
+        double sf = dot3(uv, uw) / fmax(dot3(uv, uv), 1e-300);
+        for (int q = 0; q < 3; q++) at[q] = pu[q] + (sf > 0.1 && sf < 0.9 ? sf : 0.5) * uv[q];
+        if (!fl_imop_split(C, t[(pick + 1) % 3], t[(pick + 2) % 3], at, &w)) {
             if (nskip == REFINE_MAX) return;
             skip[nskip++] = g;
             continue;

@@ -217,6 +217,17 @@ static void tx_feature(im_ctx *C, uint32_t a, uint32_t b) {
     T->fe[T->nfe - 1].was = (uint8_t)fl_imesh_is_feature(C->M, a, b);
 }
 
+/* a vertex a split takes past max_valence inside a transaction, and its
+ * valence before (the first noted): the end judges it */
+static void tx_valence(im_ctx *C, uint32_t v, uint32_t was) {
+    im_tx *T = &C->tx;
+    for (size_t i = 0; i < T->nvl; i++)
+        if (T->vl[i].v == v) return;
+    TX_PUSH(T->vl, T->nvl, T->capvl);
+    T->vl[T->nvl - 1].v = v;
+    T->vl[T->nvl - 1].was = was;
+}
+
 /* sets a feature edge on or off, noted in a transaction; 0 on ENOMEM */
 static int set_feature(im_ctx *C, uint32_t a, uint32_t b, int on) {
     tx_feature(C, a, b);
@@ -233,7 +244,7 @@ void fl_imtx_begin(im_ctx *C) {
     T->ops0[2] = C->collapses;
     T->ops0[3] = C->relaxations;
     memcpy(T->refused0, C->refused, sizeof T->refused0);
-    T->nrm = T->nmv = T->nfe = T->nvc = 0;
+    T->nrm = T->nmv = T->nfe = T->nvc = T->nvl = 0;
 }
 
 static void tx_undo(im_ctx *C) {
@@ -270,7 +281,12 @@ int fl_imtx_end(im_ctx *C) {
         lo_new = fmin(lo_new, s);
         new_bad += s < minst;
     }
-    int keep = !C->oom && T->nrm > 0 && (!C->p->strict || !(lo_new < fmin(minst, lo_old))) &&
+    int val_ok = 1;
+    for (size_t i = 0; i < T->nvl; i++) {
+        uint32_t v = T->vl[i].v, lim = (uint32_t)C->p->maxval > T->vl[i].was ? (uint32_t)C->p->maxval : T->vl[i].was;
+        if (M->vf[v].n && fl_imesh_valence(M, v) > lim) val_ok = 0;
+    }
+    int keep = !C->oom && T->nrm > 0 && val_ok && (!C->p->strict || !(lo_new < fmin(minst, lo_old))) &&
                (new_bad < old_bad || (new_bad == old_bad && lo_new > lo_old + 1e-9));
     if (keep || C->oom) return keep;
     tx_undo(C);
@@ -284,6 +300,7 @@ void fl_imtx_free(im_ctx *C) {
     free(C->tx.mv);
     free(C->tx.fe);
     free(C->tx.vc);
+    free(C->tx.vl);
     memset(&C->tx, 0, sizeof C->tx);
 }
 
@@ -440,7 +457,14 @@ int fl_imop_split(im_ctx *C, uint32_t a, uint32_t b, const double *at, int *why)
         for (size_t i = 0; i < n; i++) {
             const uint32_t *t = M->tri + 3 * (size_t)ef[i];
             uint32_t c = t[0] != a && t[0] != b ? t[0] : (t[1] != a && t[1] != b ? t[1] : t[2]);
-            if (fl_imesh_valence(M, c) + 1 > (uint32_t)C->p->maxval) {
+            uint32_t vc = fl_imesh_valence(M, c);
+            if (vc + 1 > (uint32_t)C->p->maxval) {
+                /* in a transaction the flips after may take it back: the
+                 * end judges the valence */
+                if (C->tx.active) {
+                    tx_valence(C, c, vc);
+                    continue;
+                }
                 *why = FEMLOD_IMPROVE_VALENCE;
                 return 0;
             }
