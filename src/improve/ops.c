@@ -83,6 +83,19 @@ static int isect_visit(void *payload, uint32_t g) {
         const uint32_t *r = M->tri + 3 * (size_t)ch->rm[i];
         const double *R[3] = {im_P(M, r[0]), im_P(M, r[1]), im_P(M, r[2])};
         if (fl_tri_tri_intersect(R, r, Q, t, M->eps)) return 0;
+        /* a removed face that shares a corner with g and crosses it away
+         * from that corner (the test above says no when they meet only
+         * near the corner): it, shrunk a little towards its centroid and
+         * taken apart from g's ids, meets g */
+        if (r[0] == t[0] || r[0] == t[1] || r[0] == t[2] || r[1] == t[0] || r[1] == t[1] || r[1] == t[2] ||
+            r[2] == t[0] || r[2] == t[1] || r[2] == t[2]) {
+            double S[3][3];
+            for (int k = 0; k < 3; k++)
+                for (int c = 0; c < 3; c++) S[c][k] = R[c][k] + 1e-3 * ((R[0][k] + R[1][k] + R[2][k]) / 3.0 - R[c][k]);
+            const double *SP[3] = {S[0], S[1], S[2]};
+            const uint32_t sid[3] = {IM_DEAD, IM_DEAD - 1, IM_DEAD - 2};
+            if (fl_tri_tri_intersect(SP, sid, Q, t, M->eps)) return 0;
+        }
     }
     return 1;
 }
