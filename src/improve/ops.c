@@ -91,7 +91,7 @@ static int isect_visit(void *payload, uint32_t g) {
             r[2] == t[0] || r[2] == t[1] || r[2] == t[2]) {
             double S[3][3];
             for (int k = 0; k < 3; k++)
-                for (int c = 0; c < 3; c++) S[c][k] = R[c][k] + 1e-3 * ((R[0][k] + R[1][k] + R[2][k]) / 3.0 - R[c][k]);
+                for (int c = 0; c < 3; c++) S[c][k] = R[c][k] + 1e-6 * ((R[0][k] + R[1][k] + R[2][k]) / 3.0 - R[c][k]);
             const double *SP[3] = {S[0], S[1], S[2]};
             const uint32_t sid[3] = {IM_DEAD, IM_DEAD - 1, IM_DEAD - 2};
             if (fl_tri_tri_intersect(SP, sid, Q, t, M->eps)) return 0;

@@ -700,6 +700,8 @@ static femlod_status census_into(femlod_simplify_result *r, const femlod_mesh *m
 
 /* the polish's rounds: each ends when one changes nothing */
 #define POLISH_ROUNDS 20
+/* and its passes */
+#define POLISH_PASSES 3
 
 static size_t report_ops(const femlod_improve_report *r) {
     return r->flips + r->splits + r->collapses + r->relaxations;
@@ -792,7 +794,10 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
             femlod_mesh_free(m);
             return st;
         }
-        if (bad) {
+        /* passes of the strict stage, each on the last's output (its own
+         * input surface, its features found again), while one changes
+         * something and leaves an element breaking a threshold */
+        for (int pass = 0; bad && pass < POLISH_PASSES; pass++) {
             femlod_improve_options io = improve_options(o, POLISH_ROUNDS);
             femlod_improve_report pr;
             femlod_mesh *p = NULL;
@@ -806,7 +811,8 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
              * it is always kept (test_improve measures it) */
             femlod_mesh_free(m);
             m = p;
-            polish = report_ops(&pr);
+            polish += report_ops(&pr);
+            bad = report_ops(&pr) > 0 && (pr.violating > 0 || pr.valence_out > 0);
         }
     }
     if (result) {

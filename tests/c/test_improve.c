@@ -291,8 +291,9 @@ static void simplify_case(const char *name, const femlod_mesh *m, int all_forced
             femlod_mesh_topology(pol, &tp, NULL);
             CHECK(tl.closed == tp.closed);
             CHECK(tl.components == tp.components);
-            fprintf(stderr, "polish   %-10s below %.2g %zu -> %zu (min %.3f -> %.3f), not forced %zu -> %zu\n", name,
-                    pr.min_stretch, stl, stp, s0, sp, nf2, nf);
+            fprintf(stderr,
+                    "polish   %-10s below %.2g %zu -> %zu (min %.3f -> %.3f), not forced %zu -> %zu, %zu rounds, %.3f s\n",
+                    name, pr.min_stretch, stl, stp, s0, sp, nf2, nf, pr.rounds, pr.seconds);
         }
         femlod_mesh_free(pol);
     }
