@@ -404,15 +404,19 @@ static int fix_face(run *R, uint32_t f) {
         why = FEMLOD_IMPROVE_DEPTH;
         goto refused;
     }
-    fl_imtx_begin(C);
-    int split = fl_imop_split(C, a, b, cap ? foot : NULL, &w);
-    if (split) {
-        R->budget--;
-        refine_bad(R, C->tx.nt0, C->tx.nv0);
+    /* at the foot, then (a cap) at the midpoint: the faces across ab
+     * split there may take the refinement elsewhere */
+    for (int at_mid = !cap; at_mid < 2; at_mid++) {
+        fl_imtx_begin(C);
+        int split = fl_imop_split(C, a, b, at_mid ? NULL : foot, &w);
+        if (split) {
+            R->budget--;
+            refine_bad(R, C->tx.nt0, C->tx.nv0);
+        }
+        if (fl_imtx_end(C)) return 1;
+        R->budget = b0;
+        why = split ? FEMLOD_IMPROVE_STRETCH : w;
     }
-    if (fl_imtx_end(C)) return 1;
-    R->budget = b0;
-    why = split ? FEMLOD_IMPROVE_STRETCH : w;
 refused:
     if (face_live(M, f)) M->freason[f] = (uint8_t)(why + 1);
     return 0;

@@ -481,7 +481,9 @@ static void files(int which) {
         }
         femlod_improve_options o = FEMLOD_IMPROVE_OPTIONS_INIT;
         run_case(i ? "engine" : "spider", m, &o, 0);
-        simplify_case(i ? "engine" : "spider", m, 0);
+        /* the spider: every element left is forced; the engine: not yet
+         * (docs/design.md "What remains, and why") */
+        simplify_case(i ? "engine" : "spider", m, !i);
         femlod_mesh_free(m);
     }
 }
