@@ -4,7 +4,7 @@
  *
  *   improve.c   femlod_improve: options, rounds, census, output
  *   ops.c       flip, split, collapse, relaxation: a change built aside,
- *               checked, then written
+ *               checked, then written; transactions (judge, undo)
  *   imesh.c     the working mesh: faces, vertex face lists, feature edges,
  *               vertex classes, the face grid
  *   surface.c   the input surface: nearest point and distance

@@ -4,7 +4,10 @@
  * and tangential relaxation with projection back onto the input surface.
  * Each builds a change (faces removed, faces added, at most one vertex moved
  * or created) aside; check() accepts or refuses it with the first failing
- * check; only then commit() writes it.
+ * check; only then commit() writes it. And the transactions: what commit()
+ * and the feature and class updates did since fl_imtx_begin, judged as one
+ * change by the floor rule and undone when it fails ("The floor rule,
+ * compound changes and bands").
  */
 #include "impr.h"
 
