@@ -208,6 +208,7 @@ typedef struct im_tx {
         uint32_t v, was;
     } *vl;                           /* vertices splits took past max_valence, their valence before */
     size_t nvl, capvl;
+    int why;                         /* the last refused transaction's reason */
 } im_tx;
 
 /* The refusals (femlod_improve_reason values, +1 in freason). */

@@ -390,7 +390,7 @@ static int fix_face(run *R, uint32_t f) {
         }
         if (fl_imtx_end(C)) return 1;
         R->budget = b0;
-        why = split ? FEMLOD_IMPROVE_STRETCH : w;
+        why = split ? C->tx.why : w;
         if (!split || R->budget == 0) goto refused;
     }
     /* a band (an apex that cannot move, on a feature line), or what the
@@ -415,7 +415,7 @@ static int fix_face(run *R, uint32_t f) {
         }
         if (fl_imtx_end(C)) return 1;
         R->budget = b0;
-        why = split ? FEMLOD_IMPROVE_STRETCH : w;
+        why = split ? C->tx.why : w;
     }
 refused:
     if (face_live(M, f)) M->freason[f] = (uint8_t)(why + 1);

@@ -306,8 +306,13 @@ int fl_imtx_end(im_ctx *C) {
                (new_bad < old_bad || (new_bad == old_bad && lo_new > lo_old + 1e-9));
     if (keep || C->oom) return keep;
     tx_undo(C);
-    C->refused[FEMLOD_IMPROVE_STRETCH]++;
-    for (size_t i = 0; i < T->nrm; i++) M->freason[T->rm[i].f] = FEMLOD_IMPROVE_STRETCH + 1;
+    /* the refusal: the valence when only that failed, else the stretch */
+    T->why = !val_ok && !(lo_new < fmin(minst, lo_old)) &&
+                     (new_bad < old_bad || (new_bad == old_bad && lo_new > lo_old + 1e-9))
+                 ? FEMLOD_IMPROVE_VALENCE
+                 : FEMLOD_IMPROVE_STRETCH;
+    C->refused[T->why]++;
+    for (size_t i = 0; i < T->nrm; i++) M->freason[T->rm[i].f] = (uint8_t)(T->why + 1);
     return 0;
 }
 
