@@ -14,11 +14,13 @@ FL_INTERNAL femlod_status fl_improve_mapped(femlod_mesh **out, const femlod_mesh
                                             const femlod_improve_options *options,
                                             femlod_improve_report *report, uint32_t *vmap, femlod_error *err);
 
-/* femlod_improve without splits: every change it makes raises the least
- * stretch of the faces it touches, so the mesh's least stretch never falls
- * (the polish's fallback, docs/design.md "What remains, and why"). */
-FL_INTERNAL femlod_status fl_improve_no_split(femlod_mesh **out, const femlod_mesh *mesh,
-                                              const femlod_improve_options *options, femlod_improve_report *report,
-                                              femlod_error *err);
+/* femlod_improve with every change under the floor rule: no face it makes
+ * has a stretch below min(min_stretch, the least of the faces the change
+ * removes), so the mesh's least stretch never falls below min(min_stretch,
+ * its input's) (the polish, docs/design.md "The floor rule, compound changes
+ * and bands"). */
+FL_INTERNAL femlod_status fl_improve_strict(femlod_mesh **out, const femlod_mesh *mesh,
+                                            const femlod_improve_options *options, femlod_improve_report *report,
+                                            femlod_error *err);
 
 #endif

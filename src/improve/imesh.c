@@ -324,6 +324,30 @@ uint32_t fl_imesh_add_face(imesh *M, uint32_t a, uint32_t b, uint32_t c) {
     return f;
 }
 
+/* inserts f before the first larger slot: the list stays in slot order */
+static int list_insert(im_list *l, uint32_t f) {
+    if (!list_add(l, f)) return 0;
+    uint32_t i = l->n - 1;
+    while (i > 0 && l->f[i - 1] > f) {
+        l->f[i] = l->f[i - 1];
+        i--;
+    }
+    l->f[i] = f;
+    return 1;
+}
+
+int fl_imesh_restore_face(imesh *M, uint32_t f, const uint32_t t[3]) {
+    uint32_t *d = M->tri + 3 * (size_t)f;
+    memcpy(d, t, 3 * sizeof *d);
+    for (int c = 0; c < 3; c++)
+        if (!list_insert(M->vf + t[c], f)) return 0;
+    double lo[3], hi[3];
+    im_box(im_P(M, t[0]), im_P(M, t[1]), im_P(M, t[2]), lo, hi);
+    if (!fl_imgrid_insert(&M->grid, f, lo, hi)) return 0;
+    M->live++;
+    return 1;
+}
+
 void fl_imesh_remove_face(imesh *M, uint32_t f) {
     uint32_t *t = M->tri + 3 * (size_t)f;
     for (int c = 0; c < 3; c++) list_remove(M->vf + t[c], f);

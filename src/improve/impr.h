@@ -4,7 +4,7 @@
  *
  *   improve.c   femlod_improve: options, rounds, census, output
  *   ops.c       flip, split, collapse, relaxation: a change built aside,
- *               checked, then written
+ *               checked, then written; transactions (judge, undo)
  *   samples.c   the input samples of the backward bound, held by faces
  *   imesh.c     the working mesh: faces, vertex face lists, feature edges,
  *               vertex classes, the face grid
@@ -128,6 +128,9 @@ FL_INTERNAL uint32_t fl_imesh_feature_valence(imesh *M, uint32_t v);
 /* Appends a face (lists, grid); its slot, or IM_DEAD on ENOMEM. */
 FL_INTERNAL uint32_t fl_imesh_add_face(imesh *M, uint32_t a, uint32_t b, uint32_t c);
 FL_INTERNAL void fl_imesh_remove_face(imesh *M, uint32_t f);
+/* Puts a removed face back in its slot f (lists in slot order, grid); 0 on
+ * ENOMEM. */
+FL_INTERNAL int fl_imesh_restore_face(imesh *M, uint32_t f, const uint32_t t[3]);
 /* A new vertex; its index, or IM_DEAD on ENOMEM. */
 FL_INTERNAL uint32_t fl_imesh_add_vertex(imesh *M, const double p[3], uint8_t cls);
 
@@ -172,9 +175,16 @@ typedef struct im_samples {
     size_t n, cap;
     uint32_t *head;  /* per face slot: its first sample, IM_DEAD: none */
     size_t caph;
-    /* the change checked last: the samples it moves, and to which added face (index in the change) */
-    uint32_t *pend, *pend_to;
+    /* the change checked last: the samples it moves, the face each is held
+     * by, and to which added face (index in the change) it goes */
+    uint32_t *pend, *pend_from, *pend_to;
     size_t npend, cappend;
+    /* in a transaction: the samples moved off the faces that existed when
+     * it began, and those faces (an undo puts them back) */
+    int tx_on;
+    size_t tx_nt0;
+    uint32_t *txs, *txf;
+    size_t ntx, captx;
     int oom;
 } im_samples;
 
@@ -189,12 +199,56 @@ FL_INTERNAL int fl_imsamp_place(im_samples *S, const uint32_t *rm, size_t nrm, c
 /* After the change is written: the samples placed last move to the added
  * faces' slots; 0 on ENOMEM. */
 FL_INTERNAL int fl_imsamp_commit(im_samples *S, const uint32_t *rm, size_t nrm, const uint32_t *slots, size_t nadd);
+/* A transaction over the faces from slot nt0 on; its end keeps the moves,
+ * or (keep 0, after the faces were put back) returns every sample moved
+ * since the begin to the face that held it then. */
+FL_INTERNAL void fl_imsamp_tx_begin(im_samples *S, size_t nt0);
+FL_INTERNAL void fl_imsamp_tx_end(im_samples *S, int keep, size_t nt);
 
 typedef struct im_params {
     double minst, maxsz, maxdev, cos_nc;
     int maxval;
     int st_on, sz_on, val_on;
+    int strict; /* every change keeps the floor rule (docs/design.md) */
 } im_params;
+
+/* A transaction: what the changes since fl_imtx_begin did, to judge their
+ * net effect and undo them (docs/design.md "The floor rule, compound
+ * changes and bands"). */
+typedef struct im_rmface {
+    uint32_t f, t[3];
+    double st; /* its stretch when removed */
+} im_rmface;
+typedef struct im_moved {
+    uint32_t v;
+    double p[3];
+} im_moved;
+typedef struct im_fechange {
+    uint32_t a, b;
+    uint8_t was;
+} im_fechange;
+typedef struct im_vcchange {
+    uint32_t v;
+    uint8_t was;
+} im_vcchange;
+typedef struct im_tx {
+    int active;
+    size_t nt0, nv0;                 /* the faces and vertices when it began */
+    size_t ops0[4], refused0[16];    /* the counters then */
+    im_rmface *rm;                   /* removed faces that existed when it began */
+    size_t nrm, caprm;
+    im_moved *mv;
+    size_t nmv, capmv;
+    im_fechange *fe;
+    size_t nfe, capfe;
+    im_vcchange *vc;
+    size_t nvc, capvc;
+    struct {
+        uint32_t v, was;
+    } *vl;                           /* vertices splits took past max_valence, their valence before */
+    size_t nvl, capvl;
+    int why;                         /* the last refused transaction's reason */
+} im_tx;
 
 /* The refusals (femlod_improve_reason values, +1 in freason). */
 typedef struct im_ctx {
@@ -205,6 +259,7 @@ typedef struct im_ctx {
     size_t flips, splits, collapses, relaxations;
     size_t refused[16];
     int oom;
+    im_tx tx;
     /* scratch */
     uint32_t *buf;
     size_t bufcap;
@@ -216,6 +271,16 @@ FL_INTERNAL int fl_imop_flip(im_ctx *C, uint32_t a, uint32_t b, int for_valence,
 FL_INTERNAL int fl_imop_split(im_ctx *C, uint32_t a, uint32_t b, const double *at, int *why);
 FL_INTERNAL int fl_imop_collapse(im_ctx *C, uint32_t a, uint32_t b, int *why);
 FL_INTERNAL int fl_imop_relax(im_ctx *C, uint32_t v, int *why);
+
+/* Transactions: the changes between begin and end are judged as one. end
+ * keeps them when no face they left has a stretch below min(min_stretch,
+ * the least stretch of the faces they removed) and the count of faces below
+ * min_stretch fell (or, equal, their least stretch rose); otherwise it undoes
+ * them all. 1 when kept. A split outside a transaction obeys the first rule
+ * alone. */
+FL_INTERNAL void fl_imtx_begin(im_ctx *C);
+FL_INTERNAL int fl_imtx_end(im_ctx *C);
+FL_INTERNAL void fl_imtx_free(im_ctx *C);
 
 /* }====== */
 

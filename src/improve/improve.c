@@ -175,24 +175,110 @@ static void face_edges(const imesh *M, uint32_t f, int *longest, int *shortest) 
     *shortest = lo;
 }
 
-/* One try at a triangle below min_stretch: flip its longest edge, collapse
- * its shortest, or split a cap's longest edge at the apex's foot and take
- * the apex there. 1 when something changed. */
-static int fix_face(run *R, uint32_t f) {
+/* The flips that raise the smaller stretch of their two faces, over the
+ * faces made since slot nt0, until a pass makes none (at most 8). */
+static void flip_sweep(run *R, size_t nt0) {
     im_ctx *C = &R->C;
     imesh *M = C->M;
-    int lk, sk, why = FEMLOD_IMPROVE_UNTRIED, w;
-    face_edges(M, f, &lk, &sk);
-    /* a copy: a split may move the face array */
-    uint32_t t[3];
-    memcpy(t, M->tri + 3 * (size_t)f, sizeof t);
-    uint32_t c = t[lk], a = t[(lk + 1) % 3], b = t[(lk + 2) % 3];
-    uint32_t x = t[(sk + 1) % 3], y = t[(sk + 2) % 3];
-    if (fl_imop_flip(C, a, b, 0, &w)) return 1;
-    why = w;
-    if (fl_imop_collapse(C, x, y, &w)) return 1;
-    if (why == FEMLOD_IMPROVE_TOPOLOGY || why == FEMLOD_IMPROVE_STRETCH) why = w;
-    if (R->budget == 0 || C->oom) goto refused;
+    int w;
+    for (int pass = 0; pass < 8 && !C->oom; pass++) {
+        int any = 0;
+        for (size_t f = nt0, end = M->nt; f < end && !C->oom; f++)
+            for (int k = 0; k < 3 && face_live(M, (uint32_t)f); k++) {
+                const uint32_t *t = M->tri + 3 * f;
+                if (fl_imop_flip(C, t[k], t[(k + 1) % 3], 0, &w)) any = 1;
+            }
+        if (!any) break;
+    }
+}
+
+#define REFINE_MAX 64 /* splits of a band refinement */
+
+/* Inside a transaction: while a face it made is below min_stretch, the
+ * worst (the lowest slot among equals) has an edge halved: its longest
+ * feature edge when that is longer than k times the face's height (a band's
+ * line, in pieces short enough), else its longest edge; then the flips and
+ * the relaxation of the free vertices made. The longest-edge bisection with
+ * flips that carries a band's refinement along both lines and across them to
+ * the faces beyond, until none is below, every bad face's split is refused or
+ * REFINE_MAX are made. */
+static void refine_bad(run *R, size_t nt0, size_t nv0) {
+    im_ctx *C = &R->C;
+    imesh *M = C->M;
+    double k = sqrt(3.0) / C->p->minst;
+    uint32_t skip[REFINE_MAX];
+    int nskip = 0, w;
+    for (int made = 0; made < REFINE_MAX && R->budget > 0 && !C->oom;) {
+        flip_sweep(R, nt0);
+        for (size_t v = nv0; v < M->nv && !C->oom; v++)
+            if (M->vf[v].n && M->vclass[v] == IM_FREE) fl_imop_relax(C, (uint32_t)v, &w);
+        uint32_t g = IM_DEAD;
+        double worst = C->p->minst;
+        for (size_t f = nt0; f < M->nt; f++) {
+            if (!face_live(M, (uint32_t)f)) continue;
+            double st = im_face_stretch(M, (uint32_t)f);
+            if (!(st < worst)) continue;
+            int skipped = 0;
+            for (int i = 0; i < nskip; i++) skipped |= skip[i] == (uint32_t)f;
+            if (skipped) continue;
+            worst = st;
+            g = (uint32_t)f;
+        }
+        if (g == IM_DEAD) return;
+        const uint32_t *t = M->tri + 3 * (size_t)g;
+        double l2[3], lmax = 0.0;
+        for (int e = 0; e < 3; e++) {
+            l2[e] = dist2(im_P(M, t[(e + 1) % 3]), im_P(M, t[(e + 2) % 3]));
+            lmax = fmax(lmax, l2[e]);
+        }
+        double n[3];
+        im_normal(n, im_P(M, t[0]), im_P(M, t[1]), im_P(M, t[2]));
+        double hg = sqrt(dot3(n, n) / fmax(lmax, 1e-300)); /* twice the area over the longest edge */
+        int pick = -1, feat = -1;
+        for (int e = 0; e < 3; e++) {
+            if (pick < 0 || l2[e] > l2[pick]) pick = e;
+            if (fl_imesh_is_feature(M, t[(e + 1) % 3], t[(e + 2) % 3]) && l2[e] > k * k * hg * hg &&
+                (feat < 0 || l2[e] > l2[feat]))
+                feat = e;
+        }
+        if (feat >= 0) pick = feat;
+        /* its shortest edge collapsed when that raises the least stretch
+         * there (a needle); else the split, at the apex's foot when inside
+         * the edge (a cap: right triangles), else at the midpoint */
+        int sh = 0;
+        for (int e = 1; e < 3; e++)
+            if (l2[e] < l2[sh]) sh = e;
+        if (fl_imop_collapse(C, t[(sh + 1) % 3], t[(sh + 2) % 3], &w)) {
+            made++;
+            continue;
+        }
+        t = M->tri + 3 * (size_t)g;
+        const double *pu = im_P(M, t[(pick + 1) % 3]), *pv = im_P(M, t[(pick + 2) % 3]), *pw = im_P(M, t[pick]);
+        double uv[3], uw[3], at[3];
+        sub3(uv, pv, pu);
+        sub3(uw, pw, pu);
+        double sf = dot3(uv, uw) / fmax(dot3(uv, uv), 1e-300);
+        for (int q = 0; q < 3; q++) at[q] = pu[q] + (sf > 0.1 && sf < 0.9 ? sf : 0.5) * uv[q];
+        if (!fl_imop_split(C, t[(pick + 1) % 3], t[(pick + 2) % 3], at, &w)) {
+            if (nskip == REFINE_MAX) return;
+            skip[nskip++] = g;
+            continue;
+        }
+        R->budget--;
+        made++;
+    }
+    flip_sweep(R, nt0);
+}
+
+/* The same without transactions or the floor rule (the stage's first try,
+ * "The floor rule, compound changes and bands"): a cap split at the apex's
+ * foot and the apex taken there, or, for a band within half the depth bound,
+ * the split alone; a needle's two long edges halved. */
+static int fix_loose(run *R, const uint32_t t[3], uint32_t a, uint32_t b, uint32_t c, uint32_t x, uint32_t y, int sk,
+                     int *why) {
+    im_ctx *C = &R->C;
+    imesh *M = C->M;
+    int w;
     /* a cap (the apex's foot inside ab): split there, take the apex onto it */
     const double *pa = im_P(M, a), *pb = im_P(M, b), *pc = im_P(M, c);
     double ab[3], ac[3];
@@ -211,7 +297,7 @@ static int fix_face(run *R, uint32_t f) {
         double need = 0.5 * log2(dot3(ab, ab) / fmax(h2, 1e-300));
         if (!((double)d + need <= (double)IM_MAX_DEPTH / 2)) {
             reach = 0;
-            why = FEMLOD_IMPROVE_DEPTH;
+            *why = FEMLOD_IMPROVE_DEPTH;
         }
     }
     if (s > 0.1 && s < 0.9 && reach) {
@@ -226,7 +312,7 @@ static int fix_face(run *R, uint32_t f) {
             if (M->vclass[c] == IM_FREE) fl_imop_collapse(C, c, m, &w);
             return 1;
         }
-        why = w;
+        *why = w;
     } else if (s <= 0.1 || s >= 0.9) {
         /* a needle: halve its longest edge; the halves are needles of half
          * the aspect, which the next tries halve again or collapse */
@@ -235,7 +321,7 @@ static int fix_face(run *R, uint32_t f) {
             R->budget--;
             done = 1;
         } else
-            why = w;
+            *why = w;
         /* and the other long edge (c, z): a strip's needle has its long
          * side and its diagonal nearly alike, and only halving both makes
          * the halves rounder */
@@ -245,6 +331,91 @@ static int fix_face(run *R, uint32_t f) {
             dist2(im_P(M, c), im_P(M, z)) > 4.0 * ls && fl_imop_split(C, c, z, NULL, &w))
             R->budget--;
         if (done) return 1;
+    }
+    return 0;
+}
+
+/* One try at a triangle below min_stretch: flip its longest edge, collapse
+ * its shortest, or, as one transaction, split a cap's longest edge at the
+ * apex's foot and take the apex there, halve a needle, or refine a band.
+ * 1 when something changed. */
+static int fix_face(run *R, uint32_t f) {
+    im_ctx *C = &R->C;
+    imesh *M = C->M;
+    const im_params *p = C->p;
+    int lk, sk, why = FEMLOD_IMPROVE_UNTRIED, w;
+    face_edges(M, f, &lk, &sk);
+    /* a copy: a split may move the face array */
+    uint32_t t[3];
+    memcpy(t, M->tri + 3 * (size_t)f, sizeof t);
+    uint32_t c = t[lk], a = t[(lk + 1) % 3], b = t[(lk + 2) % 3];
+    uint32_t x = t[(sk + 1) % 3], y = t[(sk + 2) % 3];
+    if (fl_imop_flip(C, a, b, 0, &w)) return 1;
+    why = w;
+    if (fl_imop_collapse(C, x, y, &w)) return 1;
+    if (why == FEMLOD_IMPROVE_TOPOLOGY || why == FEMLOD_IMPROVE_STRETCH) why = w;
+    if (R->budget == 0 || C->oom) goto refused;
+    if (!p->strict) {
+        if (fix_loose(R, t, a, b, c, x, y, sk, &why)) return 1;
+        goto refused;
+    }
+    const double *pa = im_P(M, a), *pb = im_P(M, b), *pc = im_P(M, c);
+    double ab[3], ac[3];
+    sub3(ab, pb, pa);
+    sub3(ac, pc, pa);
+    double L2 = dot3(ab, ab);
+    double s = dot3(ab, ac) / L2, h2 = 0.0;
+    for (int k = 0; k < 3; k++) h2 += (ac[k] - s * ab[k]) * (ac[k] - s * ab[k]);
+    int cap = s > 0.1 && s < 0.9;
+    double foot[3];
+    for (int k = 0; k < 3; k++) foot[k] = pa[k] + s * ab[k];
+    size_t b0 = R->budget;
+    if (M->vclass[c] == IM_FREE) {
+        /* a cap: split at the apex's foot, the apex onto it; a needle: halve
+         * its longest edge and its other long edge (c, z), when more than
+         * twice the short one (a strip's needle has its long side and its
+         * diagonal nearly alike, and only halving both makes the halves
+         * rounder); then the flips around; judged as one */
+        fl_imtx_begin(C);
+        int split = fl_imop_split(C, a, b, cap ? foot : NULL, &w);
+        if (split) {
+            R->budget--;
+            uint32_t m = (uint32_t)M->nv - 1, z = t[sk];
+            if (cap) fl_imop_collapse(C, c, m, &w);
+            else if (R->budget > 0 && z != c && fl_imesh_has_edge(M, c, z) &&
+                     dist2(im_P(M, c), im_P(M, z)) > 4.0 * dist2(im_P(M, x), im_P(M, y)) &&
+                     fl_imop_split(C, c, z, NULL, &w))
+                R->budget--;
+            flip_sweep(R, C->tx.nt0);
+        }
+        if (fl_imtx_end(C)) return 1;
+        R->budget = b0;
+        why = split ? C->tx.why : w;
+        if (!split || R->budget == 0) goto refused;
+    }
+    /* a band (an apex that cannot move, on a feature line), or what the
+     * above left: split ab at the apex's foot (a needle's at its midpoint),
+     * then the bisections and flips of refine_bad; the halvings a band
+     * needs, log2(|ab| / (k h)) with k = sqrt(3) / min_stretch, within the
+     * depth left */
+    unsigned d = M->vdepth[a] > M->vdepth[b] ? M->vdepth[a] : M->vdepth[b];
+    double need = log2(sqrt(L2) / fmax(sqrt(3.0) / p->minst * sqrt(h2), 1e-300));
+    if (!((double)d + ceil(fmax(need, 1.0)) <= (double)IM_MAX_DEPTH)) {
+        why = FEMLOD_IMPROVE_DEPTH;
+        goto refused;
+    }
+    /* at the foot, then (a cap) at the midpoint: the faces across ab
+     * split there may take the refinement elsewhere */
+    for (int at_mid = !cap; at_mid < 2; at_mid++) {
+        fl_imtx_begin(C);
+        int split = fl_imop_split(C, a, b, at_mid ? NULL : foot, &w);
+        if (split) {
+            R->budget--;
+            refine_bad(R, C->tx.nt0, C->tx.nv0);
+        }
+        if (fl_imtx_end(C)) return 1;
+        R->budget = b0;
+        why = split ? C->tx.why : w;
     }
 refused:
     if (face_live(M, f)) M->freason[f] = (uint8_t)(why + 1);
@@ -480,33 +651,60 @@ static void census_count(run *R, const census_list *L, femlod_improve_report *re
 }
 
 static femlod_status improve_run(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
-                                 femlod_improve_report *report, uint32_t *vmap, int census_only, int no_split,
+                                 femlod_improve_report *report, uint32_t *vmap, int census_only, int strict,
                                  femlod_error *err);
+
+/* The stage's least stretch below both min_stretch and its input's: the
+ * loose run went below the floor on its way and did not come back. */
+static int lowers_floor(const femlod_improve_report *r) {
+    return r->stretch_min < r->stretch_min_in && r->stretch_min < r->min_stretch;
+}
+
+/* The loose run first (its multi-round fixes of fans and caps pass through
+ * worse triangles); judged as one change by the floor rule, and when it
+ * fails, the strict run, whose every change keeps the rule (docs/design.md
+ * "The floor rule, compound changes and bands"). */
+static femlod_status improve_judged(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
+                                    femlod_improve_report *report, uint32_t *vmap, femlod_error *err) {
+    femlod_improve_report r;
+    femlod_status st = improve_run(out, mesh, options, &r, vmap, 0, 0, err);
+    if (st != FEMLOD_OK || !lowers_floor(&r)) {
+        if (st == FEMLOD_OK && report) *report = r;
+        return st;
+    }
+    femlod_mesh_free(*out);
+    *out = NULL;
+    double t = r.seconds;
+    st = improve_run(out, mesh, options, &r, vmap, 0, 1, err);
+    r.seconds += t;
+    if (st == FEMLOD_OK && report) *report = r;
+    return st;
+}
 
 femlod_status femlod_improve(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
                              femlod_improve_report *report, femlod_error *err) {
-    return improve_run(out, mesh, options, report, NULL, 0, 0, err);
+    return improve_judged(out, mesh, options, report, NULL, err);
 }
 
 femlod_status fl_improve_mapped(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
                                 femlod_improve_report *report, uint32_t *vmap, femlod_error *err) {
-    return improve_run(out, mesh, options, report, vmap, 0, 0, err);
+    return improve_judged(out, mesh, options, report, vmap, err);
 }
 
-femlod_status fl_improve_no_split(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
-                                  femlod_improve_report *report, femlod_error *err) {
+femlod_status fl_improve_strict(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
+                                femlod_improve_report *report, femlod_error *err) {
     return improve_run(out, mesh, options, report, NULL, 0, 1, err);
 }
 
 femlod_status femlod_improve_census(const femlod_mesh *mesh, const femlod_improve_options *options,
                                     femlod_improve_report *report, femlod_error *err) {
-    return improve_run(NULL, mesh, options, report, NULL, 1, 0, err);
+    return improve_run(NULL, mesh, options, report, NULL, 1, 1, err);
 }
 
 /* census_only: one round on a working copy, no output (femlod_improve_census);
- * no_split: no split is made (fl_improve_no_split) */
+ * strict: every change keeps the floor rule */
 static femlod_status improve_run(femlod_mesh **out, const femlod_mesh *mesh, const femlod_improve_options *options,
-                                 femlod_improve_report *report, uint32_t *vmap, int census_only, int no_split,
+                                 femlod_improve_report *report, uint32_t *vmap, int census_only, int strict,
                                  femlod_error *err) {
     double t0 = wall();
     femlod_improve_options o = FEMLOD_IMPROVE_OPTIONS_INIT;
@@ -538,6 +736,7 @@ static femlod_status improve_run(femlod_mesh **out, const femlod_mesh *mesh, con
     p.st_on = p.minst > 0;
     p.sz_on = p.maxsz > 0;
     p.val_on = p.maxval > 0;
+    p.strict = strict;
     int rounds = census_only ? 1 : o.max_rounds ? o.max_rounds : DEFAULT_ROUNDS;
     rep.min_stretch = p.minst;
     rep.max_size = p.maxsz;
@@ -590,7 +789,7 @@ static femlod_status improve_run(femlod_mesh **out, const femlod_mesh *mesh, con
     R.C.M = &M;
     R.C.S = &S;
     R.C.p = &p;
-    R.budget = no_split ? 0 : 4 * mesh->nt + 1024;
+    R.budget = 4 * mesh->nt + 1024;
     fl_progress prog;
     fl_progress_init(&prog, o.progress, o.progress_payload, (size_t)rounds);
     int nothing = c.st == 0 && c.sz == 0 && c.val == 0;
@@ -679,6 +878,7 @@ static femlod_status improve_run(femlod_mesh **out, const femlod_mesh *mesh, con
     free(CL.face);
     free(CL.vert);
     free(R.C.buf);
+    fl_imtx_free(&R.C);
     free(R.vreason);
     fl_imesh_free(&M);
     fl_imsurf_free(&S);

@@ -4,7 +4,10 @@
  * and tangential relaxation with projection back onto the input surface.
  * Each builds a change (faces removed, faces added, at most one vertex moved
  * or created) aside; check() accepts or refuses it with the first failing
- * check; only then commit() writes it.
+ * check; only then commit() writes it. And the transactions: what commit()
+ * and the feature and class updates did since fl_imtx_begin, judged as one
+ * change by the floor rule and undone when it fails ("The floor rule,
+ * compound changes and bands").
  */
 #include "impr.h"
 
@@ -83,6 +86,19 @@ static int isect_visit(void *payload, uint32_t g) {
         const uint32_t *r = M->tri + 3 * (size_t)ch->rm[i];
         const double *R[3] = {im_P(M, r[0]), im_P(M, r[1]), im_P(M, r[2])};
         if (fl_tri_tri_intersect(R, r, Q, t, M->eps)) return 0;
+        /* a removed face that shares a corner with g and crosses it away
+         * from that corner (the test above says no when they meet only
+         * near the corner): it, shrunk a little towards its centroid and
+         * taken apart from g's ids, meets g */
+        if (r[0] == t[0] || r[0] == t[1] || r[0] == t[2] || r[1] == t[0] || r[1] == t[1] || r[1] == t[2] ||
+            r[2] == t[0] || r[2] == t[1] || r[2] == t[2]) {
+            double S[3][3];
+            for (int k = 0; k < 3; k++)
+                for (int c = 0; c < 3; c++) S[c][k] = R[c][k] + 1e-6 * ((R[0][k] + R[1][k] + R[2][k]) / 3.0 - R[c][k]);
+            const double *SP[3] = {S[0], S[1], S[2]};
+            const uint32_t sid[3] = {IM_DEAD, IM_DEAD - 1, IM_DEAD - 2};
+            if (fl_tri_tri_intersect(SP, sid, Q, t, M->eps)) return 0;
+        }
     }
     return 1;
 }
@@ -176,8 +192,162 @@ static int check(im_ctx *C, change *ch) {
     return -1;
 }
 
+/* {====== transactions */
+
+#define TX_PUSH(arr, n, cap)                                                                                   \
+    do {                                                                                                       \
+        if ((n) == (cap)) {                                                                                    \
+            size_t c_ = (cap) ? 2 * (cap) : 16;                                                                \
+            void *p_ = fl_realloc((arr), c_, sizeof *(arr));                                                   \
+            if (!p_) {                                                                                         \
+                C->oom = 1;                                                                                    \
+                return;                                                                                        \
+            }                                                                                                  \
+            (arr) = p_;                                                                                        \
+            (cap) = c_;                                                                                        \
+        }                                                                                                      \
+        (n)++;                                                                                                 \
+    } while (0)
+
+static void tx_removed(im_ctx *C, uint32_t f) {
+    im_tx *T = &C->tx;
+    if (!T->active || f >= T->nt0) return;
+    TX_PUSH(T->rm, T->nrm, T->caprm);
+    im_rmface *r = T->rm + T->nrm - 1;
+    r->f = f;
+    memcpy(r->t, C->M->tri + 3 * (size_t)f, sizeof r->t);
+    r->st = im_face_stretch(C->M, f);
+}
+
+static void tx_moved(im_ctx *C, uint32_t v) {
+    im_tx *T = &C->tx;
+    if (!T->active || v >= T->nv0) return;
+    TX_PUSH(T->mv, T->nmv, T->capmv);
+    T->mv[T->nmv - 1].v = v;
+    memcpy(T->mv[T->nmv - 1].p, im_P(C->M, v), sizeof T->mv[0].p);
+}
+
+static void tx_class(im_ctx *C, uint32_t v) {
+    im_tx *T = &C->tx;
+    if (!T->active) return;
+    TX_PUSH(T->vc, T->nvc, T->capvc);
+    T->vc[T->nvc - 1].v = v;
+    T->vc[T->nvc - 1].was = C->M->vclass[v];
+}
+
+static void tx_feature(im_ctx *C, uint32_t a, uint32_t b) {
+    im_tx *T = &C->tx;
+    if (!T->active) return;
+    TX_PUSH(T->fe, T->nfe, T->capfe);
+    T->fe[T->nfe - 1].a = a;
+    T->fe[T->nfe - 1].b = b;
+    T->fe[T->nfe - 1].was = (uint8_t)fl_imesh_is_feature(C->M, a, b);
+}
+
+/* a vertex a split takes past max_valence inside a transaction, and its
+ * valence before (the first noted): the end judges it */
+static void tx_valence(im_ctx *C, uint32_t v, uint32_t was) {
+    im_tx *T = &C->tx;
+    for (size_t i = 0; i < T->nvl; i++)
+        if (T->vl[i].v == v) return;
+    TX_PUSH(T->vl, T->nvl, T->capvl);
+    T->vl[T->nvl - 1].v = v;
+    T->vl[T->nvl - 1].was = was;
+}
+
+/* sets a feature edge on or off, noted in a transaction; 0 on ENOMEM */
+static int set_feature(im_ctx *C, uint32_t a, uint32_t b, int on) {
+    tx_feature(C, a, b);
+    return fl_imesh_set_feature(C->M, a, b, on);
+}
+
+void fl_imtx_begin(im_ctx *C) {
+    im_tx *T = &C->tx;
+    T->active = 1;
+    T->nt0 = C->M->nt;
+    T->nv0 = C->M->nv;
+    T->ops0[0] = C->flips;
+    T->ops0[1] = C->splits;
+    T->ops0[2] = C->collapses;
+    T->ops0[3] = C->relaxations;
+    memcpy(T->refused0, C->refused, sizeof T->refused0);
+    T->nrm = T->nmv = T->nfe = T->nvc = T->nvl = 0;
+    if (C->samp) fl_imsamp_tx_begin(C->samp, C->M->nt);
+}
+
+static void tx_undo(im_ctx *C) {
+    im_tx *T = &C->tx;
+    imesh *M = C->M;
+    for (size_t f = T->nt0; f < M->nt; f++)
+        if (M->tri[3 * f] != IM_DEAD) fl_imesh_remove_face(M, (uint32_t)f);
+    for (size_t i = T->nmv; i-- > 0;) memcpy(M->pos + 3 * (size_t)T->mv[i].v, T->mv[i].p, sizeof T->mv[i].p);
+    for (size_t i = T->nfe; i-- > 0;)
+        if (!fl_imesh_set_feature(M, T->fe[i].a, T->fe[i].b, T->fe[i].was)) C->oom = 1;
+    for (size_t i = T->nvc; i-- > 0;) M->vclass[T->vc[i].v] = T->vc[i].was;
+    for (size_t i = 0; i < T->nrm; i++)
+        if (!fl_imesh_restore_face(M, T->rm[i].f, T->rm[i].t)) C->oom = 1;
+    if (C->samp) fl_imsamp_tx_end(C->samp, 0, M->nt);
+    C->flips = T->ops0[0];
+    C->splits = T->ops0[1];
+    C->collapses = T->ops0[2];
+    C->relaxations = T->ops0[3];
+    memcpy(C->refused, T->refused0, sizeof T->refused0);
+}
+
+int fl_imtx_end(im_ctx *C) {
+    im_tx *T = &C->tx;
+    imesh *M = C->M;
+    double minst = C->p->minst, lo_old = 1.0, lo_new = 1.0;
+    size_t old_bad = 0, new_bad = 0;
+    T->active = 0;
+    for (size_t i = 0; i < T->nrm; i++) {
+        lo_old = fmin(lo_old, T->rm[i].st);
+        old_bad += T->rm[i].st < minst;
+    }
+    for (size_t f = T->nt0; f < M->nt; f++) {
+        if (M->tri[3 * f] == IM_DEAD) continue;
+        double s = im_face_stretch(M, (uint32_t)f);
+        lo_new = fmin(lo_new, s);
+        new_bad += s < minst;
+    }
+    int val_ok = 1;
+    for (size_t i = 0; i < T->nvl; i++) {
+        uint32_t v = T->vl[i].v, lim = (uint32_t)C->p->maxval > T->vl[i].was ? (uint32_t)C->p->maxval : T->vl[i].was;
+        if (M->vf[v].n && fl_imesh_valence(M, v) > lim) val_ok = 0;
+    }
+    int keep = !C->oom && T->nrm > 0 && val_ok && (!C->p->strict || !(lo_new < fmin(minst, lo_old))) &&
+               (new_bad < old_bad || (new_bad == old_bad && lo_new > lo_old + 1e-9));
+    if (keep || C->oom) {
+        if (C->samp) fl_imsamp_tx_end(C->samp, 1, M->nt);
+        return keep;
+    }
+    tx_undo(C);
+    /* the refusal: the valence when only that failed, else the stretch */
+    T->why = !val_ok && !(lo_new < fmin(minst, lo_old)) &&
+                     (new_bad < old_bad || (new_bad == old_bad && lo_new > lo_old + 1e-9))
+                 ? FEMLOD_IMPROVE_VALENCE
+                 : FEMLOD_IMPROVE_STRETCH;
+    C->refused[T->why]++;
+    for (size_t i = 0; i < T->nrm; i++) M->freason[T->rm[i].f] = (uint8_t)(T->why + 1);
+    return 0;
+}
+
+void fl_imtx_free(im_ctx *C) {
+    free(C->tx.rm);
+    free(C->tx.mv);
+    free(C->tx.fe);
+    free(C->tx.vc);
+    free(C->tx.vl);
+    memset(&C->tx, 0, sizeof C->tx);
+}
+
+/* }====== */
+
 static int commit(im_ctx *C, change *ch) {
     imesh *M = C->M;
+    for (size_t i = 0; i < ch->nrm; i++) tx_removed(C, ch->rm[i]);
+    if (ch->mv != IM_DEAD) tx_moved(C, ch->mv);
+    if (C->oom) return 0;
     for (size_t i = 0; i < ch->nrm; i++) fl_imesh_remove_face(M, ch->rm[i]);
     if (ch->mv != IM_DEAD) memcpy(M->pos + 3 * (size_t)ch->mv, ch->mpos, sizeof ch->mpos);
     uint32_t slot[MAX_CHANGE];
@@ -329,7 +499,14 @@ int fl_imop_split(im_ctx *C, uint32_t a, uint32_t b, const double *at, int *why)
         for (size_t i = 0; i < n; i++) {
             const uint32_t *t = M->tri + 3 * (size_t)ef[i];
             uint32_t c = t[0] != a && t[0] != b ? t[0] : (t[1] != a && t[1] != b ? t[1] : t[2]);
-            if (fl_imesh_valence(M, c) + 1 > (uint32_t)C->p->maxval) {
+            uint32_t vc = fl_imesh_valence(M, c);
+            if (vc + 1 > (uint32_t)C->p->maxval) {
+                /* in a transaction the flips after may take it back: the
+                 * end judges the valence */
+                if (C->tx.active) {
+                    tx_valence(C, c, vc);
+                    continue;
+                }
                 *why = FEMLOD_IMPROVE_VALENCE;
                 return 0;
             }
@@ -354,6 +531,13 @@ int fl_imop_split(im_ctx *C, uint32_t a, uint32_t b, const double *at, int *why)
         ch.corr[ch.nadd][0] = (int)i;
         ch.corr[ch.nadd++][1] = -1;
     }
+    /* the floor rule: alone, no face below min(min_stretch, the least of
+     * those removed); in a transaction, judged with the rest */
+    if (C->p->strict && !C->tx.active && new_min(M, &ch) < fmin(C->p->minst, old_min(M, &ch))) {
+        *why = FEMLOD_IMPROVE_STRETCH;
+        refuse(C, &ch, FEMLOD_IMPROVE_STRETCH);
+        return 0;
+    }
     int r = check(C, &ch);
     if (r >= 0) {
         *why = r;
@@ -370,8 +554,8 @@ int fl_imop_split(im_ctx *C, uint32_t a, uint32_t b, const double *at, int *why)
     M->vdepth[m] = (uint8_t)depth;
     if (!commit(C, &ch)) return 0;
     if (feat) {
-        fl_imesh_set_feature(M, a, b, 0);
-        if (!fl_imesh_set_feature(M, a, m, 1) || !fl_imesh_set_feature(M, m, b, 1)) {
+        set_feature(C, a, b, 0);
+        if (!set_feature(C, a, m, 1) || !set_feature(C, m, b, 1)) {
             C->oom = 1;
             return 0;
         }
@@ -518,10 +702,11 @@ int fl_imop_collapse(im_ctx *C, uint32_t a, uint32_t b, int *why) {
         int fxy = fl_imesh_is_feature(M, x, y);
         if (!commit(C, ch)) break;
         for (int i = 0; i < nf; i++) {
-            fl_imesh_set_feature(M, x, fz[i], 0);
-            if (!fl_imesh_set_feature(M, y, fz[i], 1)) C->oom = 1;
+            set_feature(C, x, fz[i], 0);
+            if (!set_feature(C, y, fz[i], 1)) C->oom = 1;
         }
-        if (fxy) fl_imesh_set_feature(M, x, y, 0);
+        if (fxy) set_feature(C, x, y, 0);
+        tx_class(C, x);
         M->vclass[x] = IM_FIXED; /* gone: no face uses it */
         C->collapses++;
         done = 1;

@@ -110,7 +110,10 @@ void fl_imsamp_free(im_samples *S) {
     free(S->next);
     free(S->head);
     free(S->pend);
+    free(S->pend_from);
     free(S->pend_to);
+    free(S->txs);
+    free(S->txf);
     memset(S, 0, sizeof *S);
 }
 
@@ -145,9 +148,16 @@ int fl_imsamp_place(im_samples *S, const uint32_t *rm, size_t nrm, const double 
                     return 0;
                 }
                 S->pend_to = b;
+                uint32_t *e = fl_realloc(S->pend_from, c, sizeof *e);
+                if (!e) {
+                    S->oom = 1;
+                    return 0;
+                }
+                S->pend_from = e;
                 S->cappend = c;
             }
             S->pend[S->npend] = s;
+            S->pend_from[S->npend] = rm[i];
             S->pend_to[S->npend++] = to;
         }
     return 1;
@@ -159,6 +169,23 @@ int fl_imsamp_commit(im_samples *S, const uint32_t *rm, size_t nrm, const uint32
     if (!grow_heads(S, (size_t)top + 1)) return 0;
     for (size_t i = 0; i < nrm; i++)
         if (rm[i] < S->caph) S->head[rm[i]] = IM_DEAD;
+    /* a transaction notes each sample's first move: off a face older than it */
+    if (S->tx_on)
+        for (size_t k = 0; k < S->npend; k++) {
+            if (S->pend_from[k] >= S->tx_nt0) continue;
+            if (S->ntx == S->captx) {
+                size_t c = S->captx ? 2 * S->captx : 256;
+                uint32_t *a = fl_realloc(S->txs, c, sizeof *a);
+                if (!a) return 0;
+                S->txs = a;
+                uint32_t *b = fl_realloc(S->txf, c, sizeof *b);
+                if (!b) return 0;
+                S->txf = b;
+                S->captx = c;
+            }
+            S->txs[S->ntx] = S->pend[k];
+            S->txf[S->ntx++] = S->pend_from[k];
+        }
     /* in reverse: each list keeps the order the samples were placed in */
     for (size_t k = S->npend; k-- > 0;) {
         uint32_t s = S->pend[k], f = slots[S->pend_to[k]];
@@ -167,4 +194,26 @@ int fl_imsamp_commit(im_samples *S, const uint32_t *rm, size_t nrm, const uint32
     }
     S->npend = 0;
     return 1;
+}
+
+void fl_imsamp_tx_begin(im_samples *S, size_t nt0) {
+    S->tx_on = 1;
+    S->tx_nt0 = nt0;
+    S->ntx = 0;
+}
+
+/* The faces made since the begin are all gone after an undo, and every
+ * sample they held came off a face older than the transaction, once: back
+ * there, in the order noted (a list's order changes no result: each
+ * sample's nearest face is its own). */
+void fl_imsamp_tx_end(im_samples *S, int keep, size_t nt) {
+    S->tx_on = 0;
+    if (keep) return;
+    for (size_t f = S->tx_nt0; f < nt && f < S->caph; f++) S->head[f] = IM_DEAD;
+    for (size_t i = 0; i < S->ntx; i++) {
+        uint32_t s = S->txs[i], f = S->txf[i];
+        S->next[s] = S->head[f];
+        S->head[f] = s;
+    }
+    S->ntx = 0;
 }

@@ -655,12 +655,6 @@ static int locked_at(void *payload, double x, double y, double z) {
     return L->n && bsearch(q, L->p, L->n, 3 * sizeof *L->p, cmp_point) != NULL;
 }
 
-/* A stage's result takes the least stretch below both min_stretch and its
- * input's: never kept (docs/design.md "The improve stage inside simplify"). */
-static int lowers_floor(const femlod_improve_report *r) {
-    return r->stretch_min < r->stretch_min_in && r->stretch_min < r->min_stretch;
-}
-
 /* The honest count (docs/design.md "What remains, and why"): the output's
  * elements that break a threshold, by reason, from femlod_improve_census
  * with the simplification's thresholds; locked input vertices are the
@@ -703,6 +697,11 @@ static femlod_status census_into(femlod_simplify_result *r, const femlod_mesh *m
     r->corner_angle_max = rep.corner_angle_max;
     return FEMLOD_OK;
 }
+
+/* the polish's rounds: each ends when one changes nothing */
+#define POLISH_ROUNDS 20
+/* and its passes */
+#define POLISH_PASSES 3
 
 static size_t report_ops(const femlod_improve_report *r) {
     return r->flips + r->splits + r->collapses + r->relaxations;
@@ -764,16 +763,9 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
             return st;
         }
         /* the simplification never goes below min(min_stretch, the input's
-         * least stretch): a stage that went below both (its splits make
-         * triangles worse than the input's worst on the way) is not used */
-        if (lowers_floor(&rep)) {
-            femlod_mesh_free(better);
-            better = NULL;
-            free(lock);
-            lock = NULL;
-            so = *o;
-            run = 0;
-        }
+         * least stretch), nor does the stage: it judges its loose run by
+         * that rule and falls back to its strict one (docs/design.md "The
+         * floor rule, compound changes and bands"; test_improve measures it) */
     }
     if (run) {
         /* a ratio stays the input's: the target is the count asked for */
@@ -802,34 +794,25 @@ femlod_status femlod_simplify(femlod_mesh **out, femlod_collapse_log **out_log, 
             femlod_mesh_free(m);
             return st;
         }
-        if (bad) {
-            femlod_improve_options io = improve_options(o, 2);
+        /* passes of the strict stage, each on the last's output (its own
+         * input surface, its features found again), while one changes
+         * something and leaves an element breaking a threshold */
+        for (int pass = 0; bad && pass < POLISH_PASSES; pass++) {
+            femlod_improve_options io = improve_options(o, POLISH_ROUNDS);
             femlod_improve_report pr;
             femlod_mesh *p = NULL;
-            st = femlod_improve(&p, m, &io, &pr, err);
+            st = fl_improve_strict(&p, m, &io, &pr, err);
             if (st != FEMLOD_OK) {
                 femlod_mesh_free(m);
                 return st;
             }
-            if (lowers_floor(&pr)) {
-                /* as before the simplification: never below both; then the
-                 * polish without splits, whose changes each raise the
-                 * least stretch where they act */
-                femlod_mesh_free(p);
-                p = NULL;
-                st = fl_improve_no_split(&p, m, &io, &pr, err);
-                if (st != FEMLOD_OK) {
-                    femlod_mesh_free(m);
-                    return st;
-                }
-            }
-            if (lowers_floor(&pr)) {
-                femlod_mesh_free(p);
-            } else {
-                femlod_mesh_free(m);
-                m = p;
-                polish = report_ops(&pr);
-            }
+            /* every change of the strict stage keeps the floor rule: its
+             * output's least stretch is at least min(min_stretch, m's), so
+             * it is always kept (test_improve measures it) */
+            femlod_mesh_free(m);
+            m = p;
+            polish += report_ops(&pr);
+            bad = report_ops(&pr) > 0 && (pr.violating > 0 || pr.valence_out > 0);
         }
     }
     if (result) {
