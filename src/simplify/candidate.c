@@ -441,6 +441,7 @@ double fl_simp_evaluate(simp *S, ring *R, uint32_t e) {
     STAT(evals);
     R->ncand = 0;
     R->tolfail = 0;
+    R->c1min = -1.0;
     int why = gather(S, R, e);
     if (why != NO_REASON) {
         S->rejected[why]++;
@@ -477,6 +478,14 @@ double fl_simp_evaluate(simp *S, ring *R, uint32_t e) {
         S->rejected[w]++;
         R->reason = w;
         R->tolfail = alltol; /* every candidate failed C1, which depends on i and j only */
+        if (alltol && R->mode != M_LINE) {
+            /* the least C1 error: no cap below it lets a candidate pass
+             * while i and j keep their positions (M_LINE's midpoint depends
+             * on the feature edges around them too) */
+            double m = HUGE_VAL;
+            for (int c = 0; c < R->ncand; c++) m = mn(m, fl_quadric_eval2(S->q + R->i, S->q + R->j, R->cand[c]));
+            R->c1min = m;
+        }
     }
     return best;
 }

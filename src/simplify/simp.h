@@ -109,7 +109,10 @@ enum {
     E_TOLFAIL = 4, /* last evaluation: every candidate failed C1 only; stays so while i and j do */
     E_STALE = 8,   /* queued with an upper bound of its priority (bound_edge), not the priority */
     E_OPT = 16,    /* eopt holds the edge's optimum candidate, or E_OPTC is clear: none (make_candidates) */
-    E_OPTC = 32
+    E_OPTC = 32,
+    /* in the passes: the key is minus a lower bound of the least C1 error
+     * of the edge's candidates, all of which failed C1 (band_eval_all) */
+    E_C1KEY = 64
 };
 
 #define NO_REASON (-1)
@@ -141,6 +144,7 @@ typedef struct ring {
     int ok[3];
     int reason;      /* first failing check of the last candidate */
     int tolfail;     /* every candidate failed C1 and nothing else before it */
+    double c1min;    /* then, outside M_LINE, their least C1 error (else -1) */
 } ring;
 
 typedef struct simp_stats {
