@@ -37,13 +37,6 @@
  * and the best minimum stretch of the factors tried (0.75-1.1) */
 #define FEMLOD_SIMPLIFY_DEFER 0.85
 #endif
-/* -DFEMLOD_SIMPLIFY_C1_SKIP=0: band_eval_all evaluates every live edge at
- * each raise of error_order's cap, as before the skip of par_eval_chunk;
- * for tests/c/scan_digest.c, which checks that both give byte-identical
- * results and counts (tests/CMakeLists.txt). */
-#ifndef FEMLOD_SIMPLIFY_C1_SKIP
-#define FEMLOD_SIMPLIFY_C1_SKIP 1
-#endif
 /* -DFEMLOD_SIMPLIFY_MARKED_SCAN=1: band_vertex finds every vertex's edges
  * by the marked scan, as at boundary, non-manifold and unoriented vertices,
  * instead of one side per face; for tests/c/scan_digest.c, which checks
@@ -166,8 +159,8 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
             } else if (S->edge[ed].state & E_STALE) {
                 rnow = fl_simp_evaluate(S, R, ed);
                 if (S->oom) return -1;
-                S->edge[ed].key = rnow < 0.0 ? -1.0f : (float)rnow;
-                S->edge[ed].state &= (uint8_t)~(E_STALE | E_C1KEY);
+                if (rnow >= 0.0) S->edge[ed].key = (float)rnow; /* refused: evaluate wrote the key */
+                S->edge[ed].state &= (uint8_t)~E_STALE;
                 now = 1;
             }
             float key = S->edge[ed].key;
@@ -205,8 +198,7 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
     if (rho < tau) S->stats.attempt_low++;
 #endif
     if (S->oom) return -1;
-    S->edge[best].key = rho < 0.0 ? -1.0f : (float)rho;
-    S->edge[best].state &= (uint8_t)~E_C1KEY;
+    if (rho >= 0.0) S->edge[best].key = (float)rho;
     if (S->par && rho >= tau && !par_ring_owned(S, R)) return 2;
     int chosen = -1;
     if (rho >= tau && fl_simp_link_check(S, R) == NO_REASON) {
@@ -347,40 +339,26 @@ static void par_free(par_ctx *X) {
 }
 
 /* The first evaluation of the passes, chunk k of the edges: every edge is
- * evaluated on its own (evaluate writes only the edge's cached optimum and
- * state). An edge whose candidates all failed C1 keeps minus a lower bound
- * of their least C1 error as its key (E_C1KEY): when error_order's cap
- * rises, it is evaluated again only if the new cap reaches that error
- * (docs/design.md "Cap rounds without the evaluations that cannot change");
- * otherwise every candidate fails C1 again, and the edge is counted as
- * that evaluation would count it. */
+ * evaluated on its own (evaluate writes only the edge's record and cached
+ * optimum). At a raise of error_order's cap, an edge whose candidates all
+ * failed C1 below the new cap (fl_simp_c1_holds) is not evaluated: they
+ * fail again, and the edge is counted as that evaluation would count it. */
 static void par_eval_chunk(void *arg, int worker, size_t k) {
     par_ctx *X = arg;
     simp *S = X->S, *W = &X->wk[worker];
     size_t e0 = k * PAR_CHUNK, e1 = e0 + PAR_CHUNK < S->ne ? e0 + PAR_CHUNK : S->ne;
     for (size_t ed = e0; ed < e1 && !W->oom; ed++) {
         edge_rec *E = S->edge + ed;
-        float key = -1.0f;
-        if (!(E->flag & E_DEAD)) {
-            if (FEMLOD_SIMPLIFY_C1_SKIP && (E->state & (E_C1KEY | E_STALE)) == E_C1KEY && S->lim_on &&
-                -(double)E->key > S->lim_tol) {
-                W->rejected[FEMLOD_REJECT_TOLERANCE]++;
-                continue;
-            }
-            E->state &= (uint8_t)~E_C1KEY;
-            double rho = fl_simp_evaluate(W, &W->R, (uint32_t)ed);
-            if (rho >= 0.0) {
-                key = (float)rho;
-            } else if (W->R.c1min > 0.0 && S->sched) {
-                float f = (float)W->R.c1min; /* rounded down: a lower bound */
-                if ((double)f > W->R.c1min) f = nextafterf(f, 0.0f);
-                if (f > 0.0f && f < FLT_MAX) {
-                    key = -f;
-                    E->state |= E_C1KEY;
-                }
-            }
+        if (E->flag & E_DEAD) {
+            E->key = -1.0f;
+            continue;
         }
-        E->key = key;
+        if (!(E->state & E_STALE) && fl_simp_c1_holds(S, E)) {
+            W->rejected[FEMLOD_REJECT_TOLERANCE]++;
+            continue;
+        }
+        double rho = fl_simp_evaluate(W, &W->R, (uint32_t)ed);
+        if (rho >= 0.0) E->key = (float)rho; /* refused: evaluate wrote the key */
     }
 }
 
@@ -838,7 +816,8 @@ int fl_simp_band_run(simp *S, const femlod_simplify_options *o, size_t floor_liv
     }
     STAT_TIME(3, t3);
     /* back to the queue's conventions */
-    for (size_t ed = 0; ed < S->ne; ed++) S->edge[ed].state &= (uint8_t)~(E_STALE | E_C1KEY);
+    for (size_t ed = 0; ed < S->ne; ed++) /* an out-of-date E_C1KEY goes too */
+        if (S->edge[ed].state & E_STALE) S->edge[ed].state &= (uint8_t)~(E_STALE | E_C1KEY);
     free(S->vlock);
     free(S->vbest);
     S->vlock = NULL;
