@@ -547,6 +547,13 @@ FL_INTERNAL void fl_pool_helper_post(fl_pool_helper *h);
 FL_INTERNAL void fl_pool_helper_stop(fl_pool_helper *h);
 /* One step of a wait loop: a pause, and every 2,000 a yield of the core. */
 FL_INTERNAL void fl_pool_backoff(int *spins);
+/* The default thread count (options.threads 0): fl_pool_threads_for_load
+ * of the online processors and the other runnable tasks at the start. */
+FL_INTERNAL int fl_pool_default_threads(void);
+/* The processors that `others` runnable tasks leave: np - floor(others),
+ * at least 1 and at most min(np, 16) (docs/design.md "Threads on a shared
+ * machine"). */
+FL_INTERNAL int fl_pool_threads_for_load(long np, double others);
 
 /* }====== */
 
