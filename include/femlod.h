@@ -472,8 +472,10 @@ typedef struct femlod_simplify_options {
      * in (0, 1) fails with FEMLOD_EINPUT. */
     double fast_above;
     /* Threads (docs/design.md "The set-up in parallel parts", "Parallel
-     * fast passes" and "The exact queue's second thread"): 0 (the default)
-     * as many as the machine has processors, at most 16; the set-up's
+     * fast passes", "The exact queue's second thread" and "Threads on a
+     * shared machine"): 0 (the default) as many as the processors that the
+     * other runnable tasks leave idle when the run starts (/proc/loadavg),
+     * at least 1, at most 16; the set-up's
      * maps, the fast passes and the full evaluations use them all, the
      * exact queue two. The result does not depend on it:
      * every value gives byte-identical output, log and counts. Negative

@@ -136,7 +136,7 @@ static const page pages[] = {
      "  --lock I,J,K     these vertices of IN keep their exact position (1-based)\n"
      "  --fast-above F|off  fast passes down to F x target (F >= 1); default 3\n"
      "                   in the error order, off with --no-error-order\n"
-     "  --threads N      0: all processors (the output does not depend on it)\n"
+     "  --threads N      0: the idle processors (the output does not depend on it)\n"
      "  --hierarchy PART.flh  also write the vertex hierarchy, down to the\n"
      "                   coarsest mesh the thresholds allow\n"
      "  --hierarchy-floor N|off  stop the hierarchy at N triangles\n"

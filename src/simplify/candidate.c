@@ -33,6 +33,8 @@
  */
 #include "simp.h"
 
+#include <float.h>
+
 #include <stdlib.h>
 
 #ifndef FEMLOD_SIMPLIFY_SZDIF_RING
@@ -441,10 +443,13 @@ double fl_simp_evaluate(simp *S, ring *R, uint32_t e) {
     STAT(evals);
     R->ncand = 0;
     R->tolfail = 0;
+    edge_rec *E = S->edge + e;
+    E->state &= (uint8_t)~E_C1KEY;
     int why = gather(S, R, e);
     if (why != NO_REASON) {
         S->rejected[why]++;
         R->reason = why;
+        E->key = -1.0f;
         return -1.0;
     }
     make_candidates(S, R);
@@ -477,6 +482,22 @@ double fl_simp_evaluate(simp *S, ring *R, uint32_t e) {
         S->rejected[w]++;
         R->reason = w;
         R->tolfail = alltol; /* every candidate failed C1, which depends on i and j only */
+        E->key = -1.0f;
+        if (alltol && R->mode != M_LINE && S->sched && S->phase == 1) {
+            /* error_order's rounds: minus a lower bound of the least C1
+             * error as the key (E_C1KEY): no cap below it lets a candidate
+             * pass while i and j keep their positions (M_LINE's midpoint
+             * depends on the feature edges around them too); docs/design.md
+             * "Cap rounds without the evaluations that cannot change" */
+            double m = HUGE_VAL;
+            for (int c = 0; c < R->ncand; c++) m = mn(m, fl_quadric_eval2(S->q + R->i, S->q + R->j, R->cand[c]));
+            float f = (float)m; /* rounded down below */
+            if ((double)f > m) f = nextafterf(f, 0.0f);
+            if (f > 0.0f && f < FLT_MAX) {
+                E->key = -f;
+                E->state |= E_C1KEY;
+            }
+        }
     }
     return best;
 }

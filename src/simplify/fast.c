@@ -159,7 +159,7 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
             } else if (S->edge[ed].state & E_STALE) {
                 rnow = fl_simp_evaluate(S, R, ed);
                 if (S->oom) return -1;
-                S->edge[ed].key = rnow < 0.0 ? -1.0f : (float)rnow;
+                if (rnow >= 0.0) S->edge[ed].key = (float)rnow; /* refused: evaluate wrote the key */
                 S->edge[ed].state &= (uint8_t)~E_STALE;
                 now = 1;
             }
@@ -198,7 +198,7 @@ static int band_vertex(simp *S, uint32_t v, double tau) {
     if (rho < tau) S->stats.attempt_low++;
 #endif
     if (S->oom) return -1;
-    S->edge[best].key = rho < 0.0 ? -1.0f : (float)rho;
+    if (rho >= 0.0) S->edge[best].key = (float)rho;
     if (S->par && rho >= tau && !par_ring_owned(S, R)) return 2;
     int chosen = -1;
     if (rho >= tau && fl_simp_link_check(S, R) == NO_REASON) {
@@ -339,18 +339,26 @@ static void par_free(par_ctx *X) {
 }
 
 /* The first evaluation of the passes, chunk k of the edges: every edge is
- * evaluated on its own (evaluate writes only the edge's cached optimum). */
+ * evaluated on its own (evaluate writes only the edge's record and cached
+ * optimum). At a raise of error_order's cap, an edge whose candidates all
+ * failed C1 below the new cap (fl_simp_c1_holds) is not evaluated: they
+ * fail again, and the edge is counted as that evaluation would count it. */
 static void par_eval_chunk(void *arg, int worker, size_t k) {
     par_ctx *X = arg;
     simp *S = X->S, *W = &X->wk[worker];
     size_t e0 = k * PAR_CHUNK, e1 = e0 + PAR_CHUNK < S->ne ? e0 + PAR_CHUNK : S->ne;
     for (size_t ed = e0; ed < e1 && !W->oom; ed++) {
-        float key = -1.0f;
-        if (!(S->edge[ed].flag & E_DEAD)) {
-            double rho = fl_simp_evaluate(W, &W->R, (uint32_t)ed);
-            if (rho >= 0.0) key = (float)rho;
+        edge_rec *E = S->edge + ed;
+        if (E->flag & E_DEAD) {
+            E->key = -1.0f;
+            continue;
         }
-        S->edge[ed].key = key;
+        if (!(E->state & E_STALE) && fl_simp_c1_holds(S, E)) {
+            W->rejected[FEMLOD_REJECT_TOLERANCE]++;
+            continue;
+        }
+        double rho = fl_simp_evaluate(W, &W->R, (uint32_t)ed);
+        if (rho >= 0.0) E->key = (float)rho; /* refused: evaluate wrote the key */
     }
 }
 
@@ -808,7 +816,8 @@ int fl_simp_band_run(simp *S, const femlod_simplify_options *o, size_t floor_liv
     }
     STAT_TIME(3, t3);
     /* back to the queue's conventions */
-    for (size_t ed = 0; ed < S->ne; ed++) S->edge[ed].state &= (uint8_t)~E_STALE;
+    for (size_t ed = 0; ed < S->ne; ed++) /* an out-of-date E_C1KEY goes too */
+        if (S->edge[ed].state & E_STALE) S->edge[ed].state &= (uint8_t)~(E_STALE | E_C1KEY);
     free(S->vlock);
     free(S->vbest);
     S->vlock = NULL;

@@ -9,6 +9,8 @@
  *   fl_pool_ranges    [0, n) cut into contiguous parts, each part one item
  *                     of fl_pool_for (the set-up's maps, face-list
  *                     compaction).
+ *   fl_pool_default_threads  the default thread count: the processors the
+ *                     other runnable tasks leave idle
  *   fl_pool_helper_*  one long-lived thread that runs a job after each post
  *                     (the exact queue's ring re-evaluation): it spins
  *                     briefly (not on a loaded machine), then sleeps until
@@ -22,9 +24,11 @@
  */
 #include "simp.h"
 
+#include <math.h>
 #include <pthread.h>
 #include <sched.h>
 #include <stdatomic.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -104,6 +108,50 @@ void fl_pool_for(int nw, size_t n, fl_pool_fn fn, void *ctx, double *wait) {
         for (int t = 1; t < nt; t++)
             if (started[t]) *wait += last - r.tend[t];
     }
+}
+
+/* }====== */
+
+/* {====== how many threads by default
+ *
+ * The parallel steps (set-up parts, evaluation chunks, the passes'
+ * sub-passes) end when their last thread does, and the exact queue's
+ * helper shares each collapse's evaluations: a thread that waits for a core
+ * stalls every step. On this project's 2-core machines with another job
+ * running, one thread was 1.3-1.9x faster than two (docs/performance.md
+ * "Threads and the exact finish"), while on an idle machine two gain 7-16%.
+ * So the default takes the processors that the other runnable tasks leave
+ * idle, counted when the run starts: /proc/loadavg's count of runnable
+ * tasks, this one excepted (the 1-minute load average would count the
+ * run's own last seconds, and back-to-back runs of two threads push it to
+ * 2 by themselves); without /proc, the 1-minute load average less one.
+ * Only the time depends on it, never a result. */
+
+int fl_pool_threads_for_load(long np, double others) {
+    if (np < 1) np = 1;
+    if (np > POOL_MAX) np = POOL_MAX;
+    if (!(others >= 0.0)) others = 0.0; /* NaN too */
+    double n = (double)np - floor(others);
+    return n < 1.0 ? 1 : (int)n;
+}
+
+/* Runnable tasks other than the caller, from /proc/loadavg ("0.52 0.58
+ * 0.59 3/467 12345": 3 runnable, the reader among them); -1 without it. */
+static double others_runnable(void) {
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (!f) return -1.0;
+    double a, b, c;
+    long run = 0, all = 0;
+    int got = fscanf(f, "%lf %lf %lf %ld/%ld", &a, &b, &c, &run, &all);
+    fclose(f);
+    return got == 5 && run >= 1 ? (double)(run - 1) : -1.0;
+}
+
+int fl_pool_default_threads(void) {
+    long np = sysconf(_SC_NPROCESSORS_ONLN);
+    double others = others_runnable(), load;
+    if (others < 0.0) others = getloadavg(&load, 1) == 1 ? load - 1.0 : 0.0;
+    return fl_pool_threads_for_load(np, others);
 }
 
 /* }====== */

@@ -543,7 +543,9 @@ typedef struct eval_team {
     size_t e0, e1; /* the chunk being evaluated */
 } eval_team;
 
-/* evaluate_all's sub-chunk k of 4,096 edges. */
+/* evaluate_all's sub-chunk k of 4,096 edges. An edge whose candidates
+ * all fail C1 again (fl_simp_c1_holds) is counted as refused, not
+ * evaluated (E_TOLFAIL: as the evaluation would leave it). */
 static void eval_sub(void *arg, int worker, size_t k) {
     eval_team *X = arg;
     simp *S = X->S, *W = &X->wk[worker];
@@ -552,6 +554,12 @@ static void eval_sub(void *arg, int worker, size_t k) {
         size_t x = ed - X->e0;
         S->rkind[x] = (uint8_t)eval_wanted(S, ed);
         if (!S->rkind[x]) continue;
+        if (fl_simp_c1_holds(S, S->edge + ed)) {
+            W->rejected[FEMLOD_REJECT_TOLERANCE]++;
+            S->edge[ed].state |= E_TOLFAIL;
+            S->rkind[x] = 0;
+            continue;
+        }
         S->rrho[x] = fl_simp_evaluate(W, &W->R, (uint32_t)ed);
         S->rtol[x] = (uint8_t)W->R.tolfail;
     }

@@ -46,6 +46,13 @@
 #ifndef FEMLOD_SIMPLIFY_BOUND
 #define FEMLOD_SIMPLIFY_BOUND 0 /* 1: exact lazy re-evaluation with upper bounds (docs/simplify.md: fewer evaluations, more time) */
 #endif
+/* -DFEMLOD_SIMPLIFY_C1_SKIP=0: every edge evaluated at each round of
+ * error_order's cap, none skipped by fl_simp_c1_holds; for
+ * tests/c/scan_digest.c, which checks that both give byte-identical
+ * results and counts (tests/CMakeLists.txt). */
+#ifndef FEMLOD_SIMPLIFY_C1_SKIP
+#define FEMLOD_SIMPLIFY_C1_SKIP 1
+#endif
 /* -DFEMLOD_SIMPLIFY_STATS=1: count the work (evaluations, checks, grid
  * visits) per run in simp.stats and print it to stderr; for measurements
  * only (docs/simplify.md). No global state: the counters live in the run. */
@@ -109,7 +116,11 @@ enum {
     E_TOLFAIL = 4, /* last evaluation: every candidate failed C1 only; stays so while i and j do */
     E_STALE = 8,   /* queued with an upper bound of its priority (bound_edge), not the priority */
     E_OPT = 16,    /* eopt holds the edge's optimum candidate, or E_OPTC is clear: none (make_candidates) */
-    E_OPTC = 32
+    E_OPTC = 32,
+    /* last evaluation (phase 1 of error_order): every candidate failed C1,
+     * and the key is minus a lower bound of their least C1 error; holds
+     * while i and j do (fl_simp_evaluate writes the key of a refused edge) */
+    E_C1KEY = 64
 };
 
 #define NO_REASON (-1)
@@ -335,6 +346,14 @@ static inline const double *P(const simp *S, uint32_t v) { return S->pos + 3 * (
 
 static inline int face_alive(const simp *S, uint32_t f) { return S->face[f].v[0] != UINT32_MAX; }
 
+/* An edge, up to date but for its ends' neighbourhoods, whose last
+ * evaluation found every candidate above C1's present limit (E_C1KEY): it
+ * would again (docs/design.md "Cap rounds without the evaluations that
+ * cannot change"). */
+static inline int fl_simp_c1_holds(const simp *S, const edge_rec *E) {
+    return FEMLOD_SIMPLIFY_C1_SKIP && (E->state & E_C1KEY) && S->lim_on && -(double)E->key > S->lim_tol;
+}
+
 /* Stretch (4.1 3), method-notes "Element measures") from the corners. */
 static inline double tri_stretch(const double *a, const double *b, const double *c, double *size) {
     double la = sqrt(dist2(b, c)), lb = sqrt(dist2(a, c)), lc = sqrt(dist2(a, b));
@@ -528,6 +547,13 @@ FL_INTERNAL void fl_pool_helper_post(fl_pool_helper *h);
 FL_INTERNAL void fl_pool_helper_stop(fl_pool_helper *h);
 /* One step of a wait loop: a pause, and every 2,000 a yield of the core. */
 FL_INTERNAL void fl_pool_backoff(int *spins);
+/* The default thread count (options.threads 0): fl_pool_threads_for_load
+ * of the online processors and the other runnable tasks at the start. */
+FL_INTERNAL int fl_pool_default_threads(void);
+/* The processors that `others` runnable tasks leave: np - floor(others),
+ * at least 1 and at most min(np, 16) (docs/design.md "Threads on a shared
+ * machine"). */
+FL_INTERNAL int fl_pool_threads_for_load(long np, double others);
 
 /* }====== */
 

@@ -77,10 +77,7 @@ static femlod_status resolve_options(simp *S, const femlod_simplify_options *o, 
         return fl_error(err, FEMLOD_EINPUT, "simplify: fast_above %g is not a factor >= 1", o->fast_above);
     if (o->threads < 0) return fl_error(err, FEMLOD_EINPUT, "simplify: threads %d is negative", o->threads);
     S->nthreads = o->threads;
-    if (S->nthreads == 0) {
-        long np = sysconf(_SC_NPROCESSORS_ONLN);
-        S->nthreads = np < 1 ? 1 : (np > 16 ? 16 : (int)np);
-    }
+    if (S->nthreads == 0) S->nthreads = fl_pool_default_threads(); /* pool.c: by the load */
     if (S->nthreads > 16) S->nthreads = 16;
     S->target = o->target;
     if (o->ratio > 0.0) S->target = (size_t)floor(o->ratio * (double)nt + 0.5);

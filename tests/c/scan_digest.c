@@ -1,12 +1,16 @@
-/* scan_digest.c - digests of fast-pass simplifications, built twice: once
- * against the library as it is, once with every file of src/simplify/
+/* scan_digest.c - digests of fast-pass simplifications, built three times:
+ * against the library as it is; with every file of src/simplify/
  * compiled with FEMLOD_SIMPLIFY_MARKED_SCAN=1 (band_vertex, fast.c, then
  * finds a vertex's edges by the marked scan everywhere, not one side per
- * face at interior vertices of an oriented mesh). The test
- * scan_equivalence (tests/scan_compare.cmake) runs both and requires
- * identical lines: the one-side scan must find the same edges, so the
- * passes make the same choices (docs/simplify.md
- * "Fast passes").
+ * face at interior vertices of an oriented mesh); and with
+ * FEMLOD_SIMPLIFY_C1_SKIP=0 (every edge evaluated at each raise of
+ * error_order's cap in the passes). The tests scan_equivalence and
+ * cap_round_equivalence (tests/scan_compare.cmake) run the library's build
+ * against each other one and require identical lines: the one-side scan
+ * must find the same edges, and the skipped evaluations must be those that
+ * cannot change, so the passes make the same choices (docs/simplify.md
+ * "Fast passes", docs/design.md "Cap rounds without the evaluations that
+ * cannot change").
  *
  * Usage: scan_digest DATA-FOLDER. Each line: case, output triangles,
  * collapses, fast collapses, FNV-1a hashes of the output mesh and of the

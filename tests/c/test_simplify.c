@@ -13,6 +13,7 @@
 #include "meshcheck.h"
 #include "shapes.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #if defined(__linux__)
@@ -1413,6 +1414,35 @@ static int lock_left(void *payload, double x, double y, double z) {
     return x < -0.2;
 }
 
+/* The default thread count (pool.c, docs/design.md "Threads on a shared
+ * machine"): every processor the other runnable tasks leave idle, at least
+ * one, at most 16; and a run with threads 0 reports the count it had. */
+int fl_pool_threads_for_load(long np, double others); /* src/simplify/simp.h */
+static void test_default_threads(void) {
+    static const struct { long np; double load; int want; } c[] = {
+        {2, 0.0, 2}, {2, 0.9, 2}, {2, 1.0, 1}, {2, 1.5, 1}, {2, 2.0, 1}, {2, 9.0, 1},
+        {1, 0.0, 1}, {1, 3.0, 1}, {16, 0.4, 16}, {16, 12.5, 4}, {16, 40.0, 1}, {64, 0.0, 16},
+        {0, 0.0, 1}, {2, -1.0, 2}};
+    for (size_t k = 0; k < sizeof c / sizeof c[0]; k++) {
+        int n = fl_pool_threads_for_load(c[k].np, c[k].load);
+        if (n != c[k].want) printf("  threads for %ld processors, %g others: %d, want %d\n", c[k].np, c[k].load, n, c[k].want);
+        CHECK(n == c[k].want);
+    }
+    CHECK(fl_pool_threads_for_load(2, NAN) == 2);
+    femlod_mesh *m = load("fandisk.obj");
+    if (!m) return;
+    femlod_simplify_options o = FEMLOD_SIMPLIFY_OPTIONS_INIT;
+    o.target = 3000;
+    femlod_simplify_result res;
+    femlod_mesh *out = NULL;
+    femlod_error err;
+    CHECK(femlod_simplify(&out, NULL, m, &o, &res, &err) == FEMLOD_OK);
+    long np = sysconf(_SC_NPROCESSORS_ONLN);
+    CHECK(res.threads >= 1 && res.threads <= (np < 16 ? (int)np : 16));
+    femlod_mesh_free(out);
+    femlod_mesh_free(m);
+}
+
 static void test_threads(void) {
     femlod_mesh *m = load("fandisk.obj");
     if (!m) return;
@@ -1507,6 +1537,7 @@ int main(void) {
     test_fast_passes();
     test_default_order();
     test_threads();
+    test_default_threads();
     test_misoriented();
     test_max_deviation();
     test_lock();

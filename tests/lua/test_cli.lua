@@ -412,6 +412,11 @@ do
   local m = femlod.load(out)
   T.eq(m:counts().triangles, 3000, "simplify wrote OUT")
   T.check(m:quality().stretch_min >= 0.3, "OUT meets --min-stretch")
+  -- The rows come from the row's fields alone (push_row_quality): the rows
+  -- of the full quality tables (OUT reads back exactly)
+  local report = require "femlod.report"
+  T.eq(lines[2], report.row(femlod.load(fandisk):quality(), "fandisk.obj", "original"), "original row = report.row(quality)")
+  T.eq(lines[3], report.row(m:quality(), "fandisk.obj", "simplified"), "simplified row = report.row(quality)")
 
   -- The name=value form is the same run: the same bytes.
   local out2 = path("simplified2.obj")
