@@ -36,6 +36,19 @@ static int grow_heads(im_samples *S, size_t need) {
     return 1;
 }
 
+/* the parallel arrays a[0..n) (each of *cap entries) doubled; 0 on ENOMEM
+ * (those grown so far keep the new size, *cap the old) */
+static int grow_u32(uint32_t **a[], int n, size_t *cap) {
+    size_t c = *cap ? 2 * *cap : 256;
+    for (int i = 0; i < n; i++) {
+        uint32_t *p = fl_realloc(*a[i], c, sizeof *p);
+        if (!p) return 0;
+        *a[i] = p;
+    }
+    *cap = c;
+    return 1;
+}
+
 /* a sample at p held by face f */
 static int add(im_samples *S, const double p[3], uint32_t f) {
     if (S->n == S->cap && !grow_pts(S)) return 0;
@@ -134,27 +147,10 @@ int fl_imsamp_place(im_samples *S, const uint32_t *rm, size_t nrm, const double 
                 }
             }
             if (!(best <= r2)) return 0;
-            if (S->npend == S->cappend) {
-                size_t c = S->cappend ? 2 * S->cappend : 256;
-                uint32_t *a = fl_realloc(S->pend, c, sizeof *a);
-                if (!a) {
-                    S->oom = 1;
-                    return 0;
-                }
-                S->pend = a;
-                uint32_t *b = fl_realloc(S->pend_to, c, sizeof *b);
-                if (!b) {
-                    S->oom = 1;
-                    return 0;
-                }
-                S->pend_to = b;
-                uint32_t *e = fl_realloc(S->pend_from, c, sizeof *e);
-                if (!e) {
-                    S->oom = 1;
-                    return 0;
-                }
-                S->pend_from = e;
-                S->cappend = c;
+            uint32_t **pa[3] = {&S->pend, &S->pend_from, &S->pend_to};
+            if (S->npend == S->cappend && !grow_u32(pa, 3, &S->cappend)) {
+                S->oom = 1;
+                return 0;
             }
             S->pend[S->npend] = s;
             S->pend_from[S->npend] = rm[i];
@@ -173,16 +169,8 @@ int fl_imsamp_commit(im_samples *S, const uint32_t *rm, size_t nrm, const uint32
     if (S->tx_on)
         for (size_t k = 0; k < S->npend; k++) {
             if (S->pend_from[k] >= S->tx_nt0) continue;
-            if (S->ntx == S->captx) {
-                size_t c = S->captx ? 2 * S->captx : 256;
-                uint32_t *a = fl_realloc(S->txs, c, sizeof *a);
-                if (!a) return 0;
-                S->txs = a;
-                uint32_t *b = fl_realloc(S->txf, c, sizeof *b);
-                if (!b) return 0;
-                S->txf = b;
-                S->captx = c;
-            }
+            uint32_t **ta[2] = {&S->txs, &S->txf};
+            if (S->ntx == S->captx && !grow_u32(ta, 2, &S->captx)) return 0;
             S->txs[S->ntx] = S->pend[k];
             S->txf[S->ntx++] = S->pend_from[k];
         }
