@@ -46,6 +46,7 @@ void fl_imgrid_free(im_grid *g) {
     for (int l = 0; l < IM_LEVELS; l++) free(g->lv[l].head);
     free(g->item);
     free(g->next);
+    free(g->cell);
     free(g->big);
     memset(g, 0, sizeof *g);
 }
@@ -96,8 +97,12 @@ int fl_imgrid_insert(im_grid *g, uint32_t item, const double lo[3], const double
         uint32_t *b = fl_realloc(g->next, c, sizeof *b);
         if (!b) return 0;
         g->next = b;
+        uint32_t *d = fl_realloc(g->cell, c, sizeof *d);
+        if (!d) return 0;
+        g->cell = d;
         g->cape = c;
     }
+    uint32_t lbits = (uint32_t)(L - g->lv) << 30;
     for (int z = c0[2]; z <= c1[2]; z++)
         for (int y = c0[1]; y <= c1[1]; y++)
             for (int x = c0[0]; x <= c1[0]; x++) {
@@ -105,9 +110,19 @@ int fl_imgrid_insert(im_grid *g, uint32_t item, const double lo[3], const double
                 size_t e = g->ne++;
                 g->item[e] = item;
                 g->next[e] = L->head[cell];
+                g->cell[e] = lbits | (uint32_t)cell;
                 L->head[cell] = (uint32_t)e;
             }
     return 1;
+}
+
+void fl_imgrid_rollback(im_grid *g, size_t ne, size_t nbig) {
+    for (size_t e = g->ne; e-- > ne;) {
+        im_level *L = g->lv + (g->cell[e] >> 30);
+        L->head[g->cell[e] & 0x3fffffffu] = g->next[e];
+    }
+    if (ne < g->ne) g->ne = ne;
+    if (nbig < g->nbig) g->nbig = nbig;
 }
 
 int fl_imgrid_query(const im_grid *g, const double lo[3], const double hi[3],
@@ -293,6 +308,7 @@ static int regrid(imesh *M) {
     }
     g->ne = 0;
     g->nbig = 0;
+    g->gen++;
     for (size_t f = 0; f < M->nt; f++) {
         const uint32_t *t = M->tri + 3 * f;
         if (t[0] == IM_DEAD) continue;
@@ -336,16 +352,17 @@ static int list_insert(im_list *l, uint32_t f) {
     return 1;
 }
 
-int fl_imesh_restore_face(imesh *M, uint32_t f, const uint32_t t[3]) {
+int fl_imesh_restore_face(imesh *M, uint32_t f, const uint32_t t[3], int into_grid) {
     uint32_t *d = M->tri + 3 * (size_t)f;
     memcpy(d, t, 3 * sizeof *d);
     for (int c = 0; c < 3; c++)
         if (!list_insert(M->vf + t[c], f)) return 0;
+    M->live++;
+    /* without into_grid its entries are still there: a rolled-back grid */
+    if (!into_grid) return 1;
     double lo[3], hi[3];
     im_box(im_P(M, t[0]), im_P(M, t[1]), im_P(M, t[2]), lo, hi);
-    if (!fl_imgrid_insert(&M->grid, f, lo, hi)) return 0;
-    M->live++;
-    return 1;
+    return fl_imgrid_insert(&M->grid, f, lo, hi);
 }
 
 void fl_imesh_remove_face(imesh *M, uint32_t f) {

@@ -53,9 +53,11 @@ typedef struct im_grid {
     im_level lv[IM_LEVELS]; /* cells 8 times wider at each level: a box goes to the first
                                where it covers few cells */
     uint32_t *item, *next;
+    uint32_t *cell; /* per entry: its level (top 2 bits) and cell, for a rollback */
     size_t ne, cape;
     uint32_t *big;
     size_t nbig, capbig;
+    unsigned gen; /* rebuilds so far: a rollback's mark holds within one */
 } im_grid;
 
 FL_INTERNAL int fl_imgrid_init(im_grid *g, const double lo[3], const double hi[3], double h,
@@ -64,6 +66,9 @@ FL_INTERNAL void fl_imgrid_free(im_grid *g);
 FL_INTERNAL int fl_imgrid_insert(im_grid *g, uint32_t item, const double lo[3], const double hi[3]);
 /* Calls fn(payload, item) for each entry overlapping the box (an item may
  * come more than once); stops early when fn returns nonzero, returning it. */
+/* Removes every entry appended since the grid held ne entries and nbig big
+ * ones (each list is last in, first out), in the same generation. */
+FL_INTERNAL void fl_imgrid_rollback(im_grid *g, size_t ne, size_t nbig);
 FL_INTERNAL int fl_imgrid_query(const im_grid *g, const double lo[3], const double hi[3],
                                 int (*fn)(void *payload, uint32_t item), void *payload);
 
@@ -128,9 +133,9 @@ FL_INTERNAL uint32_t fl_imesh_feature_valence(imesh *M, uint32_t v);
 /* Appends a face (lists, grid); its slot, or IM_DEAD on ENOMEM. */
 FL_INTERNAL uint32_t fl_imesh_add_face(imesh *M, uint32_t a, uint32_t b, uint32_t c);
 FL_INTERNAL void fl_imesh_remove_face(imesh *M, uint32_t f);
-/* Puts a removed face back in its slot f (lists in slot order, grid); 0 on
- * ENOMEM. */
-FL_INTERNAL int fl_imesh_restore_face(imesh *M, uint32_t f, const uint32_t t[3]);
+/* Puts a removed face back in its slot f (lists in slot order; the grid
+ * when into_grid, else its old entries must still be there); 0 on ENOMEM. */
+FL_INTERNAL int fl_imesh_restore_face(imesh *M, uint32_t f, const uint32_t t[3], int into_grid);
 /* A new vertex; its index, or IM_DEAD on ENOMEM. */
 FL_INTERNAL uint32_t fl_imesh_add_vertex(imesh *M, const double p[3], uint8_t cls);
 
@@ -248,6 +253,8 @@ typedef struct im_tx {
     } *vl;                           /* vertices splits took past max_valence, their valence before */
     size_t nvl, capvl;
     int why;                         /* the last refused transaction's reason */
+    size_t gne0, gnbig0;             /* the face grid's entries when it began */
+    unsigned ggen0;                  /* and its generation */
 } im_tx;
 
 /* The refusals (femlod_improve_reason values, +1 in freason). */

@@ -272,6 +272,9 @@ void fl_imtx_begin(im_ctx *C) {
     T->ops0[3] = C->relaxations;
     memcpy(T->refused0, C->refused, sizeof T->refused0);
     T->nrm = T->nmv = T->nfe = T->nvc = T->nvl = 0;
+    T->gne0 = C->M->grid.ne;
+    T->gnbig0 = C->M->grid.nbig;
+    T->ggen0 = C->M->grid.gen;
     if (C->samp) fl_imsamp_tx_begin(C->samp, C->M->nt);
 }
 
@@ -284,8 +287,13 @@ static void tx_undo(im_ctx *C) {
     for (size_t i = T->nfe; i-- > 0;)
         if (!fl_imesh_set_feature(M, T->fe[i].a, T->fe[i].b, T->fe[i].was)) C->oom = 1;
     for (size_t i = T->nvc; i-- > 0;) M->vclass[T->vc[i].v] = T->vc[i].was;
+    /* the face grid as it was: every entry since the begin taken off, the
+     * removed faces' entries still there (without a rebuild between: else
+     * they go in again) */
+    int same = M->grid.gen == T->ggen0;
+    if (same) fl_imgrid_rollback(&M->grid, T->gne0, T->gnbig0);
     for (size_t i = 0; i < T->nrm; i++)
-        if (!fl_imesh_restore_face(M, T->rm[i].f, T->rm[i].t)) C->oom = 1;
+        if (!fl_imesh_restore_face(M, T->rm[i].f, T->rm[i].t, !same)) C->oom = 1;
     if (C->samp) fl_imsamp_tx_end(C->samp, 0, M->nt);
     C->flips = T->ops0[0];
     C->splits = T->ops0[1];
