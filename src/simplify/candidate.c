@@ -114,36 +114,24 @@ static int gather(simp *S, ring *R, uint32_t e) {
     R->ns = 0;
     uint8_t fi = S->vflag[i], fj = S->vflag[j];
     unsigned nf = S->edge[e].nf;
-    int feature = (S->edge[e].flag & E_FEATURE) != 0;
 
     /* Which positions may k take (method-notes "Optimal position"): fixed
      * vertices stay, a vertex on one feature line only slides along it,
-     * two features never merge across a non-feature edge. */
-    if (nf == 0 || nf > 2 || ((fi | fj) & V_NONMANIFOLD)) return FEMLOD_REJECT_TOPOLOGY;
+     * two features never merge across a non-feature edge; an interior edge
+     * between two boundary vertices would pinch the surface at k. The
+     * refusals are fl_simp_topology_kind's, which the stop's count uses too. */
+    if (fl_simp_topology_kind(S, e) >= 0) return FEMLOD_REJECT_TOPOLOGY;
     int fixi = (fi & V_FIXED) != 0, fixj = (fj & V_FIXED) != 0;
     int feati = S->fdeg[i] > 0, featj = S->fdeg[j] > 0;
-    if (fixi && fixj) return FEMLOD_REJECT_TOPOLOGY;
-    if (fixi) {
-        if (featj && !feature) return FEMLOD_REJECT_TOPOLOGY;
-        R->mode = M_KEEP_I;
-    } else if (fixj) {
-        if (feati && !feature) return FEMLOD_REJECT_TOPOLOGY;
-        R->mode = M_KEEP_J;
-    } else if (feati && featj) {
-        if (!feature) return FEMLOD_REJECT_TOPOLOGY;
-        R->mode = M_LINE; /* both on the line: slide along it */
-    } else if (feati) {
-        R->mode = M_KEEP_I;
-    } else if (featj) {
-        R->mode = M_KEEP_J;
-    } else {
-        R->mode = M_FREE;
-    }
+    if (fixi) R->mode = M_KEEP_I;
+    else if (fixj) R->mode = M_KEEP_J;
+    else if (feati && featj) R->mode = M_LINE; /* both on the line: slide along it */
+    else if (feati) R->mode = M_KEEP_I;
+    else if (featj) R->mode = M_KEEP_J;
+    else R->mode = M_FREE;
 
     /* C4 (method-notes "Valid edges"): val(i) + val(j) - 4 interior, - 3 boundary. */
     int boundary_edge = nf == 1;
-    if (!boundary_edge && (fi & V_BOUNDARY) && (fj & V_BOUNDARY))
-        return FEMLOD_REJECT_TOPOLOGY; /* would pinch the surface at k */
     int newval = (int)S->val[i] + (int)S->val[j] - (boundary_edge ? 3 : 4);
     R->newval = newval;
     if (S->val_on && newval > S->maxval) return FEMLOD_REJECT_VALENCE;

@@ -411,6 +411,38 @@ static void run(const char *name, size_t target, size_t random_ops, unsigned see
     char path[1024];
     const char *tmp = getenv("FEMLOD_TMP");
     snprintf(path, sizeof path, "%s/%s.flh", tmp && *tmp ? tmp : "/tmp", name);
+    /* every stored field of the census, the stop's count and the stage's
+     * figures comes back in its place: distinct values in each (a real run
+     * leaves most of them zero) */
+    {
+        femlod_simplify_result q = r;
+        size_t v = 1;
+        for (int k = 0; k < FEMLOD_IMPROVE_REASON_COUNT; k++) q.violating_by[k] = v++;
+        for (int k = 0; k < FEMLOD_IMPROVE_REASON_COUNT; k++) q.violating_valence_by[k] = v++;
+        for (int k = 0; k < FEMLOD_REJECT_COUNT; k++) q.stop_rejected[k] = v++;
+        for (int k = 0; k < 3; k++) q.stop_topology[k] = v++;
+        q.violating_valence = v++;
+        q.stop_taken = v++;
+        q.improve_operations = v++;
+        q.improve_triangles = v++;
+        q.polish_operations = v++;
+        q.improved = 1;
+        q.corner_angle_min = 1.5;
+        q.corner_angle_max = 6.75;
+        femlod_simplify_result q2;
+        femlod_hierarchy *g = NULL;
+        CHECK(femlod_hierarchy_save(h, path, &q, &err) == FEMLOD_OK);
+        CHECK(femlod_hierarchy_load(&g, path, &q2, &err) == FEMLOD_OK);
+        CHECK(memcmp(q2.violating_by, q.violating_by, sizeof q.violating_by) == 0 &&
+              memcmp(q2.violating_valence_by, q.violating_valence_by, sizeof q.violating_valence_by) == 0 &&
+              memcmp(q2.stop_rejected, q.stop_rejected, sizeof q.stop_rejected) == 0 &&
+              memcmp(q2.stop_topology, q.stop_topology, sizeof q.stop_topology) == 0);
+        CHECK(q2.violating_valence == q.violating_valence && q2.stop_taken == q.stop_taken &&
+              q2.improve_operations == q.improve_operations && q2.improve_triangles == q.improve_triangles &&
+              q2.polish_operations == q.polish_operations && q2.improved == 1 && q2.corner_angle_min == 1.5 &&
+              q2.corner_angle_max == 6.75);
+        femlod_hierarchy_free(g);
+    }
     CHECK(femlod_hierarchy_save(h, path, &r, &err) == FEMLOD_OK);
     femlod_hierarchy *g = NULL;
     femlod_simplify_result r2;
